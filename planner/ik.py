@@ -1,0 +1,103 @@
+"""Closed-form inverse kinematics of the two legs (eq. 3), with exact joint rates.
+
+Each leg is a planar two-link chain (shank L1 from ankle to knee, thigh L2 from
+knee to hip) in its own frontal-tilted plane. For the ankle-to-hip vector
+(u, w) in that plane (u forward, w along the tilted "up"):
+
+    ψ = atan2(u, w)                         angle of the ankle-hip line from up
+    d = √(u² + w²)
+    φ = arccos((L1² + d² − L2²) / (2 L1 d)) angle between that line and the shank
+    β_shank = ψ + φ                          shank angle from up (knee ahead of the line)
+    β_thigh = atan2(u − L1 sin β_shank, w − L1 cos β_shank)
+
+which is eq. (3) of the paper (θ2 = ψ − φ, θ3 = 2φ when L1 = L2) written in
+this package's joint signs: the paper's knee-behind sign flips to the
+human-like knee of the Bioloid. With the pelvis upright and the feet parallel to
+the plane the joint angles follow (``joints.py`` for the signs):
+
+    hip pitch = β_thigh,  knee = β_shank − β_thigh,  ankle pitch = −β_shank.
+
+Rates come from the two-link Jacobian, β̇ = J⁻¹ ṗ and β̈ = J⁻¹ (p̈ − J̇ β̇), so
+q̇ and q̈ are exact (no finite differences).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.errors import UnreachableError
+from planner.trajectory import Curve
+
+
+def two_link_ik(
+    target: tuple[Curve, Curve], shank: float, thigh: float, t: np.ndarray, *, strict: bool = True
+):
+    """Shank and thigh angles (and rates) that put the hip at ``target`` from the ankle.
+
+    Args:
+        target: (u, w) ankle-to-hip vector in the leg plane [m], each Curve of shape (n,).
+        shank, thigh: Link lengths L1, L2 [m].
+        t: Sample times [s], shape (n,), to name the sample in errors.
+        strict: Raise on an unreachable target; otherwise return NaN angles there.
+
+    Returns:
+        (β_shank, β_thigh) as Curves [rad, rad/s, rad/s²], each shape (n,).
+
+    Raises:
+        UnreachableError: a target farther than L1 + L2 (or nearer than |L1 − L2|).
+    """
+    u, w = target
+    d = np.hypot(u.p, w.p)
+    bad = (d >= shank + thigh) | (d <= abs(shank - thigh))
+    if strict and np.any(bad):
+        i = int(np.argmax(bad))
+        raise UnreachableError(
+            f"unreachable hip target at t = {t.flat[i]:.4f} s: hip-ankle "
+            f"distance {d.flat[i]:.4f} m, the leg reaches ({abs(shank - thigh):.4f}, "
+            f"{shank + thigh:.4f}) m"
+        )
+    d = np.where(bad, np.nan, d)
+    psi = np.arctan2(u.p, w.p)
+    phi = np.arccos((shank**2 + d**2 - thigh**2) / (2 * shank * d))
+    bs = psi + phi
+    bt = np.arctan2(u.p - shank * np.sin(bs), w.p - shank * np.cos(bs))
+    # p = L1 (sin bs, cos bs) + L2 (sin bt, cos bt);  J = ∂p/∂(bs, bt)
+    j11, j12 = shank * np.cos(bs), thigh * np.cos(bt)
+    j21, j22 = -shank * np.sin(bs), -thigh * np.sin(bt)
+    det = j11 * j22 - j12 * j21
+
+    def solve(ru, rw):
+        return (j22 * ru - j12 * rw) / det, (-j21 * ru + j11 * rw) / det
+
+    vs, vt = solve(u.v, w.v)
+    # J̇ β̇ = −(L1 sin bs vs² + L2 sin bt vt², L1 cos bs vs² + L2 cos bt vt²)
+    cu = -(shank * np.sin(bs) * vs**2 + thigh * np.sin(bt) * vt**2)
+    cw = -(shank * np.cos(bs) * vs**2 + thigh * np.cos(bt) * vt**2)
+    as_, at = solve(u.a - cu, w.a - cw)
+    return Curve(bs, vs, as_), Curve(bt, vt, at)
+
+
+def swing_ankle_height_in_leg_plane(lift: Curve, lean: Curve, towards_swing, hip_width: float):
+    """Height z' of the swing ankle over the stance ankle, in the tilted leg plane.
+
+    With the legs leaning by λ about x_S, a swing sole at height Z above the
+    plane (both ankles Lan above their soles) sits at rolled coordinates
+    y' = w·Lh, z' = (Z − w·Lh·sin λ) / cos λ, where w = +1 when the swing leg is
+    the left one. Derivatives by the chain rule.
+
+    Args:
+        lift: Z(t), swing sole height [m].
+        lean: λ(t) [rad].
+        towards_swing: w, +1 / −1 per sample.
+        hip_width: Lh [m].
+
+    Returns:
+        z'(t) as a Curve [m].
+    """
+    s, c = np.sin(lean.p), np.cos(lean.p)
+    k = towards_swing * hip_width
+    A = Curve(lift.p - k * s, lift.v - k * c * lean.v,
+              lift.a - k * (c * lean.a - s * lean.v**2))
+    sec = 1.0 / c
+    B = Curve(sec, s * sec**2 * lean.v, s * sec**2 * lean.a + (1 + s**2) * sec**3 * lean.v**2)
+    return Curve(A.p * B.p, A.v * B.p + A.p * B.v, A.a * B.p + 2 * A.v * B.v + A.p * B.a)

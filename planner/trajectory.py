@@ -1,0 +1,245 @@
+"""Gait parameters, the walk's timeline and its cubic-spline task trajectories (sec. IV).
+
+A walk of N steps, each of duration T (the paper's step completion time t_c):
+
+    step k:  [ DSP (1 − f)·T | SSP f·T ]          f = ssp_fraction = 0.6
+    then one closing DSP of (1 − f)·T to come to rest.
+
+* Footprints: step k's stance sole is at x = k·L/2 (L = step length); the
+  first stance is the right foot, the left foot starts L/2 behind it. The swing
+  foot advances L (from L/2 behind its stance foot to L/2 ahead), the hip L/2 per
+  step, as in the paper.
+* Hip: x is one clamped cubic spline through the step boundaries (zero velocity
+  at start and end, continuous velocity in between); its height Hz is constant.
+* Swing foot (SSP only): x and z are clamped cubic splines through lift-off,
+  mid-swing and touch-down; z rises to the lift Szmax at mid-swing; the foot
+  stays parallel to the plane.
+* Frontal tilt λ(t): the lean of legs and pelvis about x_S (positive leans to the
+  right, −y). One clamped cubic spline through 0 at start and end and ±tilt at
+  mid-SSP of each step (towards the stance foot). Both ankle rolls equal −λ.
+
+All three shapes are linear in Szmax and tilt, so a GA population only rescales
+basis curves computed once (see ``Timeline``).
+
+Hip height Hz and the lift are measured in the stance leg's frontal-tilted
+plane: Hz is the hip joint's height above the sole when λ = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from planner.errors import GaitError
+from planner.joints import LEFT, RIGHT
+
+MAX_SLOPE = np.deg2rad(60.0)
+
+
+@dataclass(frozen=True)
+class GaitParams:
+    """What to walk: step time, slope and the three GA variables.
+
+    Attributes:
+        step_time: Duration T of one step (DSP + SSP) [s], > 0.
+        slope: Plane inclination θs [rad], in (−60°, 60°); positive walks uphill.
+        hip_height: Hz, hip joint height above the sole at zero tilt [m].
+        swing_lift: Szmax, peak sole height of the swing foot [m], ≥ 0.
+        tilt: Peak frontal lean towards the stance foot [rad].
+        steps: Number of steps N, ≥ 1.
+        step_length: Swing-foot advance per step L [m], > 0.
+        ssp_fraction: Single-support share of a step, in (0, 1).
+        dt: Sample period of the plan [s].
+    """
+
+    step_time: float
+    slope: float = 0.0
+    hip_height: float = 0.21
+    swing_lift: float = 0.0666
+    tilt: float = np.deg2rad(10.0)
+    steps: int = 4
+    step_length: float = 0.111
+    ssp_fraction: float = 0.6
+    dt: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _check(self.step_time > 0, f"step time {self.step_time!r} s: must be > 0")
+        _check(
+            abs(self.slope) < MAX_SLOPE,
+            f"slope {np.rad2deg(self.slope):.4g} deg: must lie in (-60, 60) deg",
+        )
+        _check(self.hip_height > 0, f"hip height {self.hip_height!r} m: must be > 0")
+        _check(self.swing_lift >= 0, f"swing lift {self.swing_lift!r} m: must be >= 0")
+        _check(
+            abs(self.tilt) < np.pi / 4,
+            f"tilt {np.rad2deg(self.tilt):.4g} deg: must lie in (-45, 45) deg",
+        )
+        _check(
+            isinstance(self.steps, int | np.integer) and self.steps >= 1,
+            f"steps {self.steps!r}: must be an integer >= 1",
+        )
+        _check(self.step_length > 0, f"step length {self.step_length!r} m: must be > 0")
+        _check(
+            0 < self.ssp_fraction < 1,
+            f"ssp fraction {self.ssp_fraction!r}: must lie in (0, 1)",
+        )
+        _check(
+            0 < self.dt <= self.step_time / 10,
+            f"dt {self.dt!r} s: must lie in (0, step_time/10 = {self.step_time / 10:g}] s",
+        )
+
+    @classmethod
+    def nominal(cls, spec, step_time: float, **overrides) -> GaitParams:
+        """The paper's nominal gait for ``spec``: L = thigh, Szmax = 0.6·thigh."""
+        base = {"step_length": spec.thigh, "swing_lift": 0.6 * spec.thigh}
+        base.update(overrides)
+        return cls(step_time=step_time, **base)
+
+
+def _check(ok: bool, message: str) -> None:
+    if not ok:
+        raise GaitError(message)
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A time series with its first two derivatives, each shape (..., n)."""
+
+    p: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+    def scaled(self, factor) -> Curve:
+        """This curve times ``factor`` (a scalar or a column of shape (P, 1))."""
+        return Curve(self.p * factor, self.v * factor, self.a * factor)
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """Sample times, phases and the parameter-free shapes of a walk.
+
+    Built from the timing part of ``GaitParams`` only (T, N, L, f, dt); the lift
+    and tilt enter later as scale factors of ``lift_shape`` and ``tilt_shape``.
+    """
+
+    step_time: float
+    steps: int
+    step_length: float
+    ssp_fraction: float
+    dt: float
+    t: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        duration = (self.steps + 1 - self.ssp_fraction) * self.step_time
+        n = int(round(duration / self.dt)) + 1
+        object.__setattr__(self, "t", np.linspace(0.0, duration, n))
+
+    @classmethod
+    def of(cls, params: GaitParams) -> Timeline:
+        return cls(params.step_time, params.steps, params.step_length, params.ssp_fraction,
+                   params.dt)
+
+    @property
+    def dsp_time(self) -> float:
+        return (1 - self.ssp_fraction) * self.step_time
+
+    @cached_property
+    def step(self) -> np.ndarray:
+        """Step index per sample, shape (n,); N marks the closing DSP."""
+        k = np.floor(self.t / self.step_time + 1e-9).astype(int)
+        return np.minimum(k, self.steps)
+
+    @cached_property
+    def in_ssp(self) -> np.ndarray:
+        """True where the robot stands on one foot, shape (n,)."""
+        tau = self.t - self.step * self.step_time
+        return (self.step < self.steps) & (tau > self.dsp_time + 1e-12)
+
+    @cached_property
+    def stance(self) -> np.ndarray:
+        """Stance leg per sample (0 left / 1 right), shape (n,); the closing DSP keeps the last."""
+        k = np.minimum(self.step, self.steps - 1)
+        return np.where(k % 2 == 0, RIGHT, LEFT)
+
+    @cached_property
+    def stance_x(self) -> np.ndarray:
+        """x of the stance sole point in S [m], shape (n,)."""
+        return np.minimum(self.step, self.steps - 1) * self.step_length / 2
+
+    @cached_property
+    def hip_x(self) -> Curve:
+        """Hip x relative to the stance ankle [m] (and its rates), shape (n,)."""
+        L, T, N = self.step_length, self.step_time, self.steps
+        knots = np.append(np.arange(N) * T, self.t[-1])
+        values = np.append((2 * np.arange(N) - 1) * L / 4, (2 * N - 1) * L / 4)
+        curve = _spline(knots, values, self.t)
+        return Curve(curve.p - self.stance_x, curve.v, curve.a)
+
+    @cached_property
+    def swing_x(self) -> Curve:
+        """Swing ankle x relative to the stance ankle [m], shape (n,)."""
+        x = np.where(self.step < self.steps, -self.step_length / 2, self.step_length / 2)
+        ssp = _ssp_shape(self, [-self.step_length / 2, 0.0, self.step_length / 2])
+        return Curve(np.where(self.in_ssp, ssp.p, x), ssp.v * self.in_ssp, ssp.a * self.in_ssp)
+
+    @cached_property
+    def lift_shape(self) -> Curve:
+        """Swing sole height for a unit lift [-], shape (n,)."""
+        ssp = _ssp_shape(self, [0.0, 1.0, 0.0])
+        return Curve(ssp.p * self.in_ssp, ssp.v * self.in_ssp, ssp.a * self.in_ssp)
+
+    @cached_property
+    def tilt_shape(self) -> Curve:
+        """Frontal lean λ for a unit tilt [-], shape (n,)."""
+        k = np.arange(self.steps)
+        knots = np.concatenate([[0.0], (k + 1 - self.ssp_fraction / 2) * self.step_time,
+                                [self.t[-1]]])
+        lean = np.where(k % 2 == 0, 1.0, -1.0)  # step 0 stands on the right foot: lean right
+        return _spline(knots, np.concatenate([[0.0], lean, [0.0]]), self.t)
+
+    @cached_property
+    def landing_shape(self) -> np.ndarray:
+        """λ (per unit tilt) at each touch-down k = 0..N-1, shape (N,)."""
+        knots = (np.arange(self.steps) + 1) * self.step_time
+        idx = np.minimum(np.searchsorted(self.t, knots - 1e-9), self.t.size - 1)
+        return self.tilt_shape.p[idx]
+
+
+def _spline(knots, values, t) -> Curve:
+    """Clamped cubic spline (zero end velocities) through (knots, values), sampled at t."""
+    spline = CubicSpline(knots, values, bc_type="clamped")
+    return Curve(spline(t), spline(t, 1), spline(t, 2))
+
+
+def _ssp_shape(timeline: Timeline, values) -> Curve:
+    """Clamped spline over a unit SSP through lift-off, mid-swing, touch-down, per sample."""
+    ssp_time = timeline.ssp_fraction * timeline.step_time
+    tau = timeline.t - timeline.step * timeline.step_time - timeline.dsp_time
+    s = np.clip(tau / ssp_time, 0.0, 1.0)
+    spline = CubicSpline([0.0, 0.5, 1.0], values, bc_type="clamped")
+    return Curve(spline(s), spline(s, 1) / ssp_time, spline(s, 2) / ssp_time**2)
+
+
+def footprint_y(timeline: Timeline, hip_width: float, tilt) -> np.ndarray:
+    """Lateral position of each step's stance sole in S [m].
+
+    The first stance (right) foot is at −Lh/2. Each touch-down lands the swing
+    sole at Lh / cos λ beside the stance sole (legs stay parallel in the frontal
+    plane and there is no hip roll), towards the swing side.
+
+    Args:
+        tilt: Peak tilt [rad], scalar or shape (P,).
+
+    Returns:
+        y of step k's stance sole, shape (N,) or (P, N).
+    """
+    tilt = np.asarray(tilt, dtype=float)[..., None]
+    lean = tilt * timeline.landing_shape  # (.., N)
+    k = np.arange(timeline.steps)
+    towards_swing = np.where(k % 2 == 0, 1.0, -1.0)  # step 0: stance right, swing left (+y)
+    offsets = towards_swing * hip_width / np.cos(lean)
+    first = np.full(tilt.shape[:-1] + (1,), -hip_width / 2)
+    return np.concatenate([first, first + np.cumsum(offsets, axis=-1)[..., :-1]], axis=-1)

@@ -1,0 +1,163 @@
+"""Zero-moment point on the (possibly tilted) plane, support polygons and margins (sec. V-B).
+
+The ZMP is the point p of the plane z_S = 0 about which the tangential moment of
+the ground reaction vanishes. With each link's momentum balance
+m_i a_i = m_i g + (forces), the ground wrench about the origin of S is
+
+    F = Σ m_i (a_i − g),      M = Σ [ c_i × m_i (a_i − g) + Ḣ_i ],   Ḣ_i = I_i ω̇_i + ω_i × I_i ω_i
+
+and M − p × F has zero x and y components at
+
+    p_x = −M_y / F_z = Σ [ m x (z̈ − g_z) − m (ẍ − g_x) z − Ḣ_y ] / Σ m (z̈ − g_z)
+    p_y =  M_x / F_z = Σ [ m y (z̈ − g_z) − m (ÿ − g_y) z + Ḣ_x ] / Σ m (z̈ − g_z)
+
+which is eq. (4) of the paper with the gravity vector written in S: on a slope
+θs, g_S = (−g sin θs, 0, −g cos θs), so both components appear. On flat ground
+(g_x = 0, g_z = −g) it is the paper's formula (whose "z̈ − g" takes g = −9.81).
+
+The same point is the centre of pressure (CoP) of the ground wrench that the
+Newton-Euler recursion returns at the feet (``cop_of_wrench``); the two are
+computed by separate code and checked against each other in the tests.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.newton_euler import cross
+
+
+def zmp_multibody(mass, com, com_acc, momentum_rate, gravity) -> np.ndarray:
+    """Eq. (4): ZMP of a multibody from link CoM motion, in S [m].
+
+    Args:
+        mass: Link masses [kg], shape (L,).
+        com: Link CoM positions in S [m], shape (n, L, 3).
+        com_acc: Link CoM accelerations in S [m/s²], shape (n, L, 3).
+        momentum_rate: Ḣ_i = I ω̇ + ω × I ω per link in S [N m], shape (n, L, 3).
+        gravity: Gravity in S [m/s²], shape (3,).
+
+    Returns:
+        (p_x, p_y) on the plane, shape (n, 2).
+    """
+    x, y, z = com[..., 0], com[..., 1], com[..., 2]
+    ax, ay, az = (com_acc - gravity)[..., 0], (com_acc - gravity)[..., 1], (com_acc - gravity)[..., 2]
+    den = np.einsum("l,nl->n", mass, az)
+    px = (np.einsum("l,nl->n", mass, x * az - ax * z) - momentum_rate[..., 1].sum(-1)) / den
+    py = (np.einsum("l,nl->n", mass, y * az - ay * z) + momentum_rate[..., 0].sum(-1)) / den
+    return np.stack([px, py], axis=-1)
+
+
+def cop_of_wrench(force, moment, point) -> np.ndarray:
+    """Centre of pressure on the plane z_S = 0 of a wrench acting at ``point``.
+
+    Args:
+        force: Ground force [N], shape (n, 3), in S.
+        moment: Ground moment about ``point`` [N m], shape (n, 3), in S.
+        point: Reference point in S [m], shape (n, 3).
+
+    Returns:
+        CoP (x, y) [m], shape (n, 2); NaN where the normal force is not positive.
+    """
+    moment_origin = moment + cross(point, force)
+    fz = np.where(force[:, 2] > 0, force[:, 2], np.nan)
+    return np.stack([-moment_origin[:, 1] / fz, moment_origin[:, 0] / fz], axis=-1)
+
+
+def zmp_lipm(com, com_acc, gravity) -> np.ndarray:
+    """Eq. (5): linear-inverted-pendulum ZMP from the whole-body CoM, in S [m].
+
+    A point mass with no vertical acceleration (the LIPM's constant height):
+    p = c_xy − c_z (c̈_xy − g_xy) / (−g_z). On flat ground this is
+    p = c − z_c c̈ / g; the paper prints "+ z_c c̈ / g", which holds only with
+    g = −9.81 (the same sign convention as its eq. 4).
+
+    Args:
+        com: CoM in S [m], shape (n, 3).
+        com_acc: CoM acceleration in S [m/s²], shape (n, 3).
+        gravity: Gravity in S [m/s²], shape (3,).
+
+    Returns:
+        (p_x, p_y), shape (n, 2).
+    """
+    return com[:, :2] - com[:, 2:3] * (com_acc[:, :2] - gravity[:2]) / (-gravity[2])
+
+
+def friction_ratio(force) -> np.ndarray:
+    """Required friction |F_t| / F_n of a ground force in S, shape (n,) (inf if F_n ≤ 0)."""
+    fn = force[..., 2]
+    ft = np.hypot(force[..., 0], force[..., 1])
+    return np.where(fn > 0, ft / np.where(fn > 0, fn, 1.0), np.inf)
+
+
+def foot_corners(center, heel: float, toe: float, half_width: float) -> np.ndarray:
+    """Sole rectangle of feet parallel to x_S, counter-clockwise from front-right.
+
+    Args:
+        center: Sole point under the ankle in S [m], shape (n, 2) (or (n, 3)).
+        heel, toe: Ankle-to-heel and ankle-to-toe distances along x [m].
+        half_width: Half the foot width [m].
+
+    Returns:
+        Corners (x, y), shape (n, 4, 2).
+    """
+    offsets = np.array(
+        [[toe, -half_width], [toe, half_width], [-heel, half_width], [-heel, -half_width]]
+    )
+    return np.asarray(center)[:, None, :2] + offsets
+
+
+def support_polygon(stance_corners, other_corners, double_support) -> np.ndarray:
+    """Support polygon: the stance sole, or the convex hull of both soles in DSP.
+
+    Both soles are translates of one rectangle, so their hull is the Minkowski sum of
+    the rectangle with the segment joining them: each corner v_i becomes v_i or
+    v_i + d, or both, depending on which side of its two edges d points to. The
+    result is a counter-clockwise polygon of 8 vertices, repeats allowed.
+
+    Args:
+        stance_corners: (n, 4, 2) stance sole, counter-clockwise.
+        other_corners: (n, 4, 2) other sole (same rectangle, translated).
+        double_support: (n,) bool, True where both feet carry load.
+
+    Returns:
+        Vertices, shape (n, 8, 2).
+    """
+    d = (other_corners[:, 0] - stance_corners[:, 0]) * double_support[:, None]  # (n, 2)
+    normals = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])  # edges i → i+1
+    ahead = (d @ normals.T) > 0  # (n, 4): edge i faces the direction d
+    out = np.empty(stance_corners.shape[:1] + (8, 2))
+    for i in range(4):
+        incoming, outgoing = ahead[:, i - 1], ahead[:, i]
+        v, vd = stance_corners[:, i], stance_corners[:, i] + d
+        first = np.where(incoming[:, None], vd, v)
+        second = np.where(outgoing[:, None], vd, v)
+        out[:, 2 * i], out[:, 2 * i + 1] = first, second
+    return out
+
+
+def signed_margin(points, polygon) -> np.ndarray:
+    """Signed distance from points to a convex polygon's boundary [m], positive inside.
+
+    Args:
+        points: (n, 2).
+        polygon: Counter-clockwise vertices, repeats allowed, shape (n, V, 2).
+
+    Returns:
+        Margin, shape (n,); NaN where the point is NaN.
+    """
+    a = polygon
+    b = np.roll(polygon, -1, axis=1)
+    edge = b - a
+    length = np.hypot(edge[..., 0], edge[..., 1])
+    valid = length > 1e-12
+    safe = np.where(valid, length, 1.0)
+    rel = points[:, None, :] - a
+    # inward normal of a counter-clockwise edge is its left normal (−e_y, e_x)
+    inside_dist = (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0]) / safe
+    inside_dist = np.where(valid, inside_dist, np.inf)
+    line_min = inside_dist.min(axis=1)
+    s = np.clip(np.einsum("nvi,nvi->nv", rel, edge) / np.where(valid, safe**2, 1.0), 0.0, 1.0)
+    closest = a + s[..., None] * edge
+    seg = np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)).min(axis=1)
+    return np.where(line_min >= 0, line_min, -seg)
