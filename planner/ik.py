@@ -96,8 +96,7 @@ def swing_ankle_height_in_leg_plane(lift: Curve, lean: Curve, towards_swing, hip
     """
     s, c = np.sin(lean.p), np.cos(lean.p)
     k = towards_swing * hip_width
-    A = Curve(lift.p - k * s, lift.v - k * c * lean.v,
-              lift.a - k * (c * lean.a - s * lean.v**2))
+    A = Curve(lift.p - k * s, lift.v - k * c * lean.v, lift.a - k * (c * lean.a - s * lean.v**2))
     sec = 1.0 / c
     B = Curve(sec, s * sec**2 * lean.v, s * sec**2 * lean.a + (1 + s**2) * sec**3 * lean.v**2)
     return Curve(A.p * B.p, A.v * B.p + A.p * B.v, A.a * B.p + 2 * A.v * B.v + A.p * B.a)

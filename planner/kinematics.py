@@ -68,7 +68,9 @@ def dh_transform(a, alpha, d, theta) -> np.ndarray:
     Returns:
         T of frame i in frame i-1, shape (*broadcast, 4, 4).
     """
-    a, alpha, d, theta = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (a, alpha, d, theta)))
+    a, alpha, d, theta = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (a, alpha, d, theta))
+    )
     ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
     T = np.zeros(a.shape + (4, 4))
     T[..., 0, 0], T[..., 0, 1], T[..., 0, 3] = ct, -st, a
@@ -128,8 +130,17 @@ class Chain:
         d[0, 4], d[1, 4] = spec.hip_width, -spec.hip_width
         sign = np.array([-1, 1, 1, 1, -1, -1, -1, -1], dtype=float)
         offset = np.array([0, 0, 0, 0, np.pi, 0, 0, 0])
-        chain = cls(a, alpha, d, sign, offset, np.zeros(9), np.zeros((2, 9, 3)),
-                    np.zeros((2, 9, 3, 3)), spec.ankle_height)
+        chain = cls(
+            a,
+            alpha,
+            d,
+            sign,
+            offset,
+            np.zeros(9),
+            np.zeros((2, 9, 3)),
+            np.zeros((2, 9, 3, 3)),
+            spec.ankle_height,
+        )
         mass = np.array([spec.links[name].mass for _, name in CHAIN_LINKS])
         com = np.zeros((2, 9, 3))
         inertia = np.zeros((2, 9, 3, 3))
@@ -150,8 +161,12 @@ class Chain:
         q = np.asarray(q, dtype=float)
         theta = self.theta_sign * q + self.theta_offset
         n = q.shape[0]
-        return (np.broadcast_to(self.a, (n, 8)), np.broadcast_to(self.alpha, (n, 8)),
-                self.d[np.asarray(stance)], theta)
+        return (
+            np.broadcast_to(self.a, (n, 8)),
+            np.broadcast_to(self.alpha, (n, 8)),
+            self.d[np.asarray(stance)],
+            theta,
+        )
 
     def frames(self, q: np.ndarray, stance_foot: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """Poses of DH frames 0..8 and the swing sole frame in S.
@@ -206,9 +221,14 @@ def _body_frames_at_zero(spec: RobotSpec, side: int) -> list[dict]:
     swing_ankle = swing_knee - [0, 0, spec.shank]
     stance_right = side != LEFT
     origins = [
-        (ankle, stance_right), (ankle, stance_right), (knee, stance_right), (hip, stance_right),
+        (ankle, stance_right),
+        (ankle, stance_right),
+        (knee, stance_right),
+        (hip, stance_right),
         ((hip + swing_hip) / 2, False),
-        (swing_hip, not stance_right), (swing_knee, not stance_right),
-        (swing_ankle, not stance_right), (swing_ankle, not stance_right),
+        (swing_hip, not stance_right),
+        (swing_knee, not stance_right),
+        (swing_ankle, not stance_right),
+        (swing_ankle, not stance_right),
     ]
     return [{"origin": np.asarray(o, dtype=float), "right_leg": r} for o, r in origins]

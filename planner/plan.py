@@ -115,12 +115,35 @@ class Plan:
 
     def save_npz(self, path: str | Path) -> None:
         """Write the series and a ``meta`` JSON string (spec and gait parameters)."""
-        meta = {"params": asdict(self.params), "spec": _spec_dict(self.spec),
-                "joint_names": list(JOINT_NAMES), "summary": self.summary()}
-        arrays = {k: getattr(self, k) for k in (
-            "t", "q", "qd", "qdd", "tau", "zmp", "zmp_lipm", "cop_ne", "com", "com_acc",
-            "stance", "double_support", "stance_sole", "swing_sole", "margin",
-            "ground_force", "friction_ratio", "work")}
+        meta = {
+            "params": asdict(self.params),
+            "spec": _spec_dict(self.spec),
+            "joint_names": list(JOINT_NAMES),
+            "summary": self.summary(),
+        }
+        arrays = {
+            k: getattr(self, k)
+            for k in (
+                "t",
+                "q",
+                "qd",
+                "qdd",
+                "tau",
+                "zmp",
+                "zmp_lipm",
+                "cop_ne",
+                "com",
+                "com_acc",
+                "stance",
+                "double_support",
+                "stance_sole",
+                "swing_sole",
+                "margin",
+                "ground_force",
+                "friction_ratio",
+                "work",
+            )
+        }
         np.savez_compressed(path, q_left_right=self.q_left_right, meta=json.dumps(meta), **arrays)
 
 
@@ -131,8 +154,15 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
         UnreachableError: the hip height or lift asks a leg for more than it reaches.
     """
     timeline = Timeline.of(params)
-    walk = _solve(spec, timeline, params.slope, np.array([params.hip_height]),
-                  np.array([params.swing_lift]), np.array([params.tilt]), strict=True)
+    walk = _solve(
+        spec,
+        timeline,
+        params.slope,
+        np.array([params.hip_height]),
+        np.array([params.swing_lift]),
+        np.array([params.tilt]),
+        strict=True,
+    )
     return Plan(params=params, spec=spec, **{k: v[0] for k, v in walk.items()})
 
 
@@ -149,8 +179,16 @@ def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarra
         reach its targets gets work = inf and margin = −inf.
     """
     pop = np.atleast_2d(np.asarray(population, dtype=float))
-    walk = _solve(spec, Timeline.of(params), params.slope, pop[:, 0], pop[:, 1], pop[:, 2],
-                  strict=False, light=True)
+    walk = _solve(
+        spec,
+        Timeline.of(params),
+        params.slope,
+        pop[:, 0],
+        pop[:, 1],
+        pop[:, 2],
+        strict=False,
+        light=True,
+    )
     work, margin = walk["work"].sum(axis=1), walk["margin"].min(axis=1)
     bad = ~np.isfinite(work) | ~np.isfinite(margin)
     return np.where(bad, np.inf, work), np.where(bad, -np.inf, margin)
@@ -161,37 +199,58 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
     P, n = hip_height.size, timeline.t.size
     chain = Chain.from_spec(spec)
     gravity = gravity_in_slope(slope)
-    col = (lambda x: np.asarray(x, dtype=float).reshape(P, 1))
-    flat = (lambda a: np.broadcast_to(a, (P, n)).reshape(-1))
+
+    def col(x):  # one value per individual, as a column (P, 1)
+        return np.asarray(x, dtype=float).reshape(P, 1)
+
+    def flat(a):  # (n,) or (P, n) → the flat batch of P·n samples
+        return np.broadcast_to(a, (P, n)).reshape(-1)
+
     zeros = np.zeros((P, n))
 
     stance = flat(timeline.stance)
     lean = timeline.tilt_shape.scaled(col(tilt))
     towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)
     z_swing = swing_ankle_height_in_leg_plane(
-        timeline.lift_shape.scaled(col(lift)), lean, towards_swing, spec.hip_width)
+        timeline.lift_shape.scaled(col(lift)), lean, towards_swing, spec.hip_width
+    )
     hip_u, hip_w = timeline.hip_x, col(hip_height) - spec.ankle_height
-    stance_target = (Curve(*(flat(x) for x in (hip_u.p, hip_u.v, hip_u.a))),
-                     Curve(flat(hip_w + zeros), flat(zeros), flat(zeros)))
+    stance_target = (
+        Curve(*(flat(x) for x in (hip_u.p, hip_u.v, hip_u.a))),
+        Curve(flat(hip_w + zeros), flat(zeros), flat(zeros)),
+    )
     sx = timeline.swing_x
-    swing_target = (Curve(*(flat(h - s) for h, s in zip((hip_u.p, hip_u.v, hip_u.a),
-                                                           (sx.p, sx.v, sx.a), strict=True))),
-                    Curve(flat(hip_w - z_swing.p), flat(-z_swing.v), flat(-z_swing.a)))
+    swing_target = (
+        Curve(
+            *(
+                flat(h - s)
+                for h, s in zip((hip_u.p, hip_u.v, hip_u.a), (sx.p, sx.v, sx.a), strict=True)
+            )
+        ),
+        Curve(flat(hip_w - z_swing.p), flat(-z_swing.v), flat(-z_swing.a)),
+    )
     t_flat = flat(timeline.t)
     with np.errstate(invalid="ignore", divide="ignore"):
-        legs = [two_link_ik(target, spec.shank, spec.thigh, t_flat, strict=strict)
-                for target in (stance_target, swing_target)]
+        legs = [
+            two_link_ik(target, spec.shank, spec.thigh, t_flat, strict=strict)
+            for target in (stance_target, swing_target)
+        ]
     (bs, bt), (bs2, bt2) = legs
     lam = Curve(flat(lean.p), flat(lean.v), flat(lean.a))
-    q, qd, qdd = (np.stack([-lam_, -s, s - t, t, t2, s2 - t2, -s2, -lam_], axis=1)
-                  for lam_, s, t, s2, t2 in ((lam.p, bs.p, bt.p, bs2.p, bt2.p),
-                                             (lam.v, bs.v, bt.v, bs2.v, bt2.v),
-                                             (lam.a, bs.a, bt.a, bs2.a, bt2.a)))
+    q, qd, qdd = (
+        np.stack([-lam_, -s, s - t, t, t2, s2 - t2, -s2, -lam_], axis=1)
+        for lam_, s, t, s2, t2 in (
+            (lam.p, bs.p, bt.p, bs2.p, bt2.p),
+            (lam.v, bs.v, bt.v, bs2.v, bt2.v),
+            (lam.a, bs.a, bt.a, bs2.a, bt2.a),
+        )
+    )
 
     feet_y = footprint_y(timeline, spec.hip_width, col(tilt)[:, 0])  # (P, N)
     step = np.minimum(timeline.step, timeline.steps - 1)
-    stance_sole = np.stack([flat(timeline.stance_x), feet_y[:, step].reshape(-1),
-                            np.zeros(P * n)], axis=1)
+    stance_sole = np.stack(
+        [flat(timeline.stance_x), feet_y[:, step].reshape(-1), np.zeros(P * n)], axis=1
+    )
     frames = chain.frames(q, stance_sole, stance)
     dyn = inverse_dynamics(chain, frames, qd, qdd, stance, gravity)
 
@@ -203,13 +262,17 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
     tau = dyn.tau + swing_wrench_torques(chain, frames, swing_force, swing_moment)
 
     coms = chain.link_coms(frames, stance)
-    momentum_rate = (np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega_dot)
-                     + cross(dyn.omega, np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega)))
+    momentum_rate = np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega_dot) + cross(
+        dyn.omega, np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega)
+    )
     zmp = zmp_multibody(chain.mass, coms, dyn.com_acc, momentum_rate, gravity)
     double = flat(~timeline.in_ssp)
     heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
-    polygon = support_polygon(foot_corners(stance_sole, heel, toe, half),
-                              foot_corners(swing_sole, heel, toe, half), double)
+    polygon = support_polygon(
+        foot_corners(stance_sole, heel, toe, half),
+        foot_corners(swing_sole, heel, toe, half),
+        double,
+    )
     margin = signed_margin(zmp, polygon)
     power = np.abs(tau * qd).reshape(P, n, 8)
     work = np.trapezoid(power, timeline.t, axis=1)
@@ -221,17 +284,31 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
     com_acc = np.einsum("k,nki->ni", chain.mass, dyn.com_acc) / mass
     stance_force = dyn.stance_force - swing_force
     stance_moment = dyn.stance_moment - swing_moment - cross(swing_sole - stance_sole, swing_force)
-    total_moment_at_stance = stance_moment + swing_moment + cross(swing_sole - stance_sole,
-                                                                  swing_force)
+    total_moment_at_stance = (
+        stance_moment + swing_moment + cross(swing_sole - stance_sole, swing_force)
+    )
     ground = stance_force + swing_force
     series = {
-        "t": flat(timeline.t), "q": q, "qd": qd, "qdd": qdd, "tau": tau, "zmp": zmp,
+        "t": flat(timeline.t),
+        "q": q,
+        "qd": qd,
+        "qdd": qdd,
+        "tau": tau,
+        "zmp": zmp,
         "zmp_lipm": zmp_lipm(com, com_acc, gravity),
         "cop_ne": cop_of_wrench(ground, total_moment_at_stance, stance_sole),
-        "com": com, "com_acc": com_acc, "stance": stance, "double_support": double,
-        "stance_sole": stance_sole, "swing_sole": swing_sole, "polygon": polygon,
-        "margin": margin, "ground_force": ground, "stance_force": stance_force,
-        "swing_force": swing_force, "friction_ratio": friction_ratio(ground),
+        "com": com,
+        "com_acc": com_acc,
+        "stance": stance,
+        "double_support": double,
+        "stance_sole": stance_sole,
+        "swing_sole": swing_sole,
+        "polygon": polygon,
+        "margin": margin,
+        "ground_force": ground,
+        "stance_force": stance_force,
+        "swing_force": swing_force,
+        "friction_ratio": friction_ratio(ground),
     }
     out.update({k: v.reshape((P, n) + v.shape[1:]) for k, v in series.items()})
     return out

@@ -138,7 +138,8 @@ class RobotSpec:
         shift = {"toe": delta, "heel": 0.0, "both": delta / 2}
         if extend not in shift:
             raise SpecError(f"extend = {extend!r}: must be one of toe, heel, both")
-        return _replace(self, foot_length=foot_length, ankle_to_toe=self.ankle_to_toe + shift[extend])
+        toe = self.ankle_to_toe + shift[extend]
+        return _replace(self, foot_length=foot_length, ankle_to_toe=toe)
 
     def with_mass_scale(self, scale: dict[str, float]) -> RobotSpec:
         """A copy with link masses and inertias multiplied per link name (or "all")."""

@@ -15,8 +15,8 @@ A walk of N steps, each of duration T (the paper's step completion time t_c):
   mid-swing and touch-down; z rises to the lift Szmax at mid-swing; the foot
   stays parallel to the plane.
 * Frontal tilt λ(t): the lean of legs and pelvis about x_S (positive leans to the
-  right, −y). One clamped cubic spline through 0 at start and end and ±tilt at
-  mid-SSP of each step (towards the stance foot). Both ankle rolls equal −λ.
+  right, −y), ±tilt towards the stance foot, in one of two shapes
+  (``Timeline.tilt_shape``). Both ankle rolls equal −λ.
 
 All three shapes are linear in Szmax and tilt, so a GA population only rescales
 basis curves computed once (see ``Timeline``).
@@ -37,6 +37,7 @@ from planner.errors import GaitError
 from planner.joints import LEFT, RIGHT
 
 MAX_SLOPE = np.deg2rad(60.0)
+TILT_PROFILES = ("sway", "hold")
 
 
 @dataclass(frozen=True)
@@ -53,17 +54,19 @@ class GaitParams:
         step_length: Swing-foot advance per step L [m], > 0.
         ssp_fraction: Single-support share of a step, in (0, 1).
         dt: Sample period of the plan [s].
+        tilt_profile: "sway" or "hold", the shape of λ(t) (``Timeline.tilt_shape``).
     """
 
     step_time: float
     slope: float = 0.0
-    hip_height: float = 0.21
+    hip_height: float = 0.20
     swing_lift: float = 0.0666
-    tilt: float = np.deg2rad(10.0)
+    tilt: float = np.deg2rad(12.0)
     steps: int = 4
     step_length: float = 0.111
     ssp_fraction: float = 0.6
     dt: float = 1e-3
+    tilt_profile: str = "hold"
 
     def __post_init__(self) -> None:
         _check(self.step_time > 0, f"step time {self.step_time!r} s: must be > 0")
@@ -85,6 +88,10 @@ class GaitParams:
         _check(
             0 < self.ssp_fraction < 1,
             f"ssp fraction {self.ssp_fraction!r}: must lie in (0, 1)",
+        )
+        _check(
+            self.tilt_profile in TILT_PROFILES,
+            f"tilt profile {self.tilt_profile!r}: must be one of {', '.join(TILT_PROFILES)}",
         )
         _check(
             0 < self.dt <= self.step_time / 10,
@@ -130,6 +137,7 @@ class Timeline:
     step_length: float
     ssp_fraction: float
     dt: float
+    tilt_profile: str = "hold"
     t: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -139,8 +147,14 @@ class Timeline:
 
     @classmethod
     def of(cls, params: GaitParams) -> Timeline:
-        return cls(params.step_time, params.steps, params.step_length, params.ssp_fraction,
-                   params.dt)
+        return cls(
+            params.step_time,
+            params.steps,
+            params.step_length,
+            params.ssp_fraction,
+            params.dt,
+            params.tilt_profile,
+        )
 
     @property
     def dsp_time(self) -> float:
@@ -193,12 +207,31 @@ class Timeline:
 
     @cached_property
     def tilt_shape(self) -> Curve:
-        """Frontal lean λ for a unit tilt [-], shape (n,)."""
+        """Frontal lean λ for a unit tilt [-], shape (n,): +1 leans towards step 0's stance.
+
+        "sway": one clamped cubic spline through 0 at start and end and ±1 at
+        mid-SSP of each step; the weight moves across during the whole step, as
+        in the natural lateral oscillation of a walking biped.
+        "hold": ±1 held through each SSP; in each DSP the paper's cubic
+        d0 + d1 t + d2 t² + d3 t³ with zero end rates carries λ from the previous
+        value to the next (quasi-static: the whole transfer happens in the DSP).
+        """
         k = np.arange(self.steps)
-        knots = np.concatenate([[0.0], (k + 1 - self.ssp_fraction / 2) * self.step_time,
-                                [self.t[-1]]])
         lean = np.where(k % 2 == 0, 1.0, -1.0)  # step 0 stands on the right foot: lean right
-        return _spline(knots, np.concatenate([[0.0], lean, [0.0]]), self.t)
+        if self.tilt_profile == "sway":
+            knots = np.concatenate(
+                [[0.0], (k + 1 - self.ssp_fraction / 2) * self.step_time, [self.t[-1]]]
+            )
+            return _spline(knots, np.concatenate([[0.0], lean, [0.0]]), self.t)
+        before = np.concatenate([[0.0], lean])[self.step]
+        after = np.append(lean, 0.0)[self.step]
+        x = np.clip((self.t - self.step * self.step_time) / self.dsp_time, 0.0, 1.0)
+        span = after - before
+        return Curve(
+            before + span * (3 * x**2 - 2 * x**3),
+            span * 6 * x * (1 - x) / self.dsp_time,
+            span * (6 - 12 * x) / self.dsp_time**2 * (x < 1),
+        )
 
     @cached_property
     def landing_shape(self) -> np.ndarray:

@@ -41,7 +41,8 @@ def zmp_multibody(mass, com, com_acc, momentum_rate, gravity) -> np.ndarray:
         (p_x, p_y) on the plane, shape (n, 2).
     """
     x, y, z = com[..., 0], com[..., 1], com[..., 2]
-    ax, ay, az = (com_acc - gravity)[..., 0], (com_acc - gravity)[..., 1], (com_acc - gravity)[..., 2]
+    net = com_acc - gravity  # a − g per link
+    ax, ay, az = net[..., 0], net[..., 1], net[..., 2]
     den = np.einsum("l,nl->n", mass, az)
     px = (np.einsum("l,nl->n", mass, x * az - ax * z) - momentum_rate[..., 1].sum(-1)) / den
     py = (np.einsum("l,nl->n", mass, y * az - ay * z) + momentum_rate[..., 0].sum(-1)) / den
