@@ -77,26 +77,29 @@ def two_link_ik(
     return Curve(bs, vs, as_), Curve(bt, vt, at)
 
 
-def swing_ankle_height_in_leg_plane(lift: Curve, lean: Curve, towards_swing, hip_width: float):
-    """Height z' of the swing ankle over the stance ankle, in the tilted leg plane.
+def tilted_plane_height(height: Curve, lateral, lean: Curve) -> Curve:
+    """Height z' in the stance leg's tilted plane of a point at a given height in S.
 
-    With the legs leaning by λ about x_S, a swing sole at height Z above the
-    plane (both ankles Lan above their soles) sits at rolled coordinates
-    y' = w·Lh, z' = (Z − w·Lh·sin λ) / cos λ, where w = +1 when the swing leg is
-    the left one. Derivatives by the chain rule.
+    With the legs leaning by λ about x_S, a point whose rolled lateral coordinate
+    is y' (relative to the stance ankle) and whose height over the stance ankle in
+    S is h sits at z' = (h − y'·sin λ) / cos λ. Used for the swing ankle
+    (y' = ±Lh, h = lift) and the pelvis centre (y' = ±Lh/2, h = Hz − Lan), so the
+    configuration does not jump when the stance leg changes. Derivatives by the
+    chain rule.
 
     Args:
-        lift: Z(t), swing sole height [m].
+        height: h(t) over the stance ankle, in S [m].
+        lateral: y' [m], per sample or scalar.
         lean: λ(t) [rad].
-        towards_swing: w, +1 / −1 per sample.
-        hip_width: Lh [m].
 
     Returns:
         z'(t) as a Curve [m].
     """
     s, c = np.sin(lean.p), np.cos(lean.p)
-    k = towards_swing * hip_width
-    A = Curve(lift.p - k * s, lift.v - k * c * lean.v, lift.a - k * (c * lean.a - s * lean.v**2))
+    k = lateral
+    A = Curve(
+        height.p - k * s, height.v - k * c * lean.v, height.a - k * (c * lean.a - s * lean.v**2)
+    )
     sec = 1.0 / c
     B = Curve(sec, s * sec**2 * lean.v, s * sec**2 * lean.a + (1 + s**2) * sec**3 * lean.v**2)
     return Curve(A.p * B.p, A.v * B.p + A.p * B.v, A.a * B.p + 2 * A.v * B.v + A.p * B.a)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.ik import swing_ankle_height_in_leg_plane, two_link_ik
+from planner.ik import tilted_plane_height, two_link_ik
 from planner.joints import JOINT_NAMES, RIGHT, stance_swing_to_left_right
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import cross, inverse_dynamics, swing_wrench_torques
@@ -210,16 +210,17 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
 
     stance = flat(timeline.stance)
     lean = timeline.tilt_shape.scaled(col(tilt))
-    towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)
-    z_swing = swing_ankle_height_in_leg_plane(
-        timeline.lift_shape.scaled(col(lift)), lean, towards_swing, spec.hip_width
+    towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)  # +1: swing hip at +y
+    z_swing = tilted_plane_height(
+        timeline.lift_shape.scaled(col(lift)), towards_swing * spec.hip_width, lean
     )
-    hip_u, hip_w = timeline.hip_x, col(hip_height) - spec.ankle_height
+    pelvis = Curve(col(hip_height) - spec.ankle_height + zeros, zeros, zeros)
+    hip_w = tilted_plane_height(pelvis, towards_swing * spec.hip_width / 2, lean)
+    hip_u, sx = timeline.hip_x, timeline.swing_x
     stance_target = (
         Curve(*(flat(x) for x in (hip_u.p, hip_u.v, hip_u.a))),
-        Curve(flat(hip_w + zeros), flat(zeros), flat(zeros)),
+        Curve(flat(hip_w.p), flat(hip_w.v), flat(hip_w.a)),
     )
-    sx = timeline.swing_x
     swing_target = (
         Curve(
             *(
@@ -227,7 +228,7 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
                 for h, s in zip((hip_u.p, hip_u.v, hip_u.a), (sx.p, sx.v, sx.a), strict=True)
             )
         ),
-        Curve(flat(hip_w - z_swing.p), flat(-z_swing.v), flat(-z_swing.a)),
+        Curve(flat(hip_w.p - z_swing.p), flat(hip_w.v - z_swing.v), flat(hip_w.a - z_swing.a)),
     )
     t_flat = flat(timeline.t)
     with np.errstate(invalid="ignore", divide="ignore"):

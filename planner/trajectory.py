@@ -21,8 +21,9 @@ A walk of N steps, each of duration T (the paper's step completion time t_c):
 All three shapes are linear in Szmax and tilt, so a GA population only rescales
 basis curves computed once (see ``Timeline``).
 
-Hip height Hz and the lift are measured in the stance leg's frontal-tilted
-plane: Hz is the hip joint's height above the sole when λ = 0.
+Hip height Hz is the height of the pelvis centre (midway between the hip
+joints) above the plane, along its normal; the lift is the swing sole's height.
+Both are converted to each leg's tilted plane in ``ik.tilted_plane_height``.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ class GaitParams:
     Attributes:
         step_time: Duration T of one step (DSP + SSP) [s], > 0.
         slope: Plane inclination θs [rad], in (−60°, 60°); positive walks uphill.
-        hip_height: Hz, hip joint height above the sole at zero tilt [m].
+        hip_height: Hz, pelvis-centre height above the plane [m].
         swing_lift: Szmax, peak sole height of the swing foot [m], ≥ 0.
         tilt: Peak frontal lean towards the stance foot [rad].
         steps: Number of steps N, ≥ 1.
