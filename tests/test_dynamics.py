@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import away_from_phase_changes
 
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import inverse_dynamics
@@ -57,13 +58,7 @@ def test_power_balance(spec, step_time, slope_deg):
     ground_power = np.einsum("ni,ni->n", plan.swing_force, sole_velocity)
     actuator_power = np.einsum("nj,nj->n", plan.tau, plan.qd)
     error = actuator_power - (energy_rate - ground_power)
-    # Accelerations jump where a phase starts or ends; a central difference
-    # straddling such a kink is not a derivative, so skip ±2 samples there.
-    change = np.flatnonzero(np.diff(plan.double_support.astype(int)) | np.diff(plan.stance))
-    keep = np.ones(t.size, bool)
-    keep[:3] = keep[-3:] = False
-    for offset in range(-2, 4):
-        keep[np.clip(change + offset, 0, t.size - 1)] = False
+    keep = away_from_phase_changes(plan)
     relative = np.abs(error[keep]).max() / np.abs(actuator_power).max()
     print(
         f"power balance T={step_time} s slope={slope_deg} deg: max error "
