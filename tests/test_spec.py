@@ -1,0 +1,44 @@
+"""Robot spec loading and refusal of malformed specs with one clear line."""
+
+import tomllib
+
+import pytest
+
+from planner.errors import SpecError
+from planner.spec import default_spec_path, load_spec, spec_from_dict
+
+
+def _data():
+    with open(default_spec_path(), "rb") as f:
+        return tomllib.load(f)
+
+
+def test_default_spec_is_the_papers_biped(spec):
+    assert (spec.thigh, spec.shank, spec.hip_width) == (0.111, 0.111, 0.085)
+    assert (spec.ankle_height, spec.ankle_to_toe, spec.foot_length) == (0.032, 0.049, 0.100)
+    assert 0.5 < spec.total_mass < 0.9  # an 8-servo Bioloid biped weighs well under 1 kg
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda d: d["geometry"].pop("thigh"), "missing key geometry.thigh"),
+        (lambda d: d["geometry"].update(shank=-0.1), "geometry.shank = -0.1: must be > 0"),
+        (lambda d: d["links"]["foot"].update(mass=-1.0), "links.foot.mass = -1.0"),
+        (lambda d: d["links"]["thigh"].update(inertia=[1e-5, -1e-5, 1e-5]), "positive definite"),
+        (lambda d: d["links"]["thigh"].update(inertia=[1e-5, 1e-5, 1e-3]), "triangle"),
+        (lambda d: d.pop("servo"), "missing table [servo]"),
+        (lambda d: d["joint_limits"].update(knee=[1.0, 0.0]), "joint_limits.knee"),
+    ],
+)
+def test_malformed_spec_is_refused(edit, message):
+    data = _data()
+    edit(data)
+    with pytest.raises(SpecError, match=message.replace("[", r"\[").replace(".", r"\.")) as err:
+        spec_from_dict(data)
+    assert "\n" not in str(err.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(SpecError, match="no such file"):
+        load_spec(tmp_path / "nope.toml")
