@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -113,8 +112,12 @@ class Plan:
             "max_lipm_distance_m": float(np.hypot(*(self.zmp - self.zmp_lipm).T).max()),
         }
 
-    def save_npz(self, path: str | Path) -> None:
-        """Write the series and a ``meta`` JSON string (spec and gait parameters)."""
+    def save_npz(self, file) -> None:
+        """Write the series and a ``meta`` JSON string (spec and gait parameters).
+
+        Args:
+            file: A path or a binary file object (``np.savez_compressed`` target).
+        """
         meta = {
             "params": asdict(self.params),
             "spec": _spec_dict(self.spec),
@@ -144,7 +147,7 @@ class Plan:
                 "work",
             )
         }
-        np.savez_compressed(path, q_left_right=self.q_left_right, meta=json.dumps(meta), **arrays)
+        np.savez_compressed(file, q_left_right=self.q_left_right, meta=json.dumps(meta), **arrays)
 
 
 def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:

@@ -1,0 +1,160 @@
+"""The ``slopewalk`` command: the only place that reads flags and files.
+
+Degrees at the command line, radians inside. Every refusal is one line on
+stderr with a non-zero exit and no traceback; output files appear only whole.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from planner.errors import SlopewalkError
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = True) -> None:
+    p.add_argument(
+        "--step-time",
+        type=_positive_float,
+        required=step_time_required,
+        metavar="S",
+        help="step completion time t_c [s], > 0",
+    )
+    p.add_argument(
+        "--slope",
+        type=_positive_float,
+        default=0.0,
+        metavar="DEG",
+        help="plane inclination [deg], in (-60, 60); positive walks uphill",
+    )
+    p.add_argument("--robot", metavar="FILE", help="robot spec TOML (default: the paper's biped)")
+    p.add_argument(
+        "--hip-height",
+        type=_positive_float,
+        metavar="M",
+        help="pelvis-centre height above the plane Hz [m]",
+    )
+    p.add_argument(
+        "--swing-lift",
+        type=_positive_float,
+        metavar="M",
+        help="peak swing-foot lift Szmax [m] (default 0.6 x thigh)",
+    )
+    p.add_argument(
+        "--tilt",
+        type=_positive_float,
+        metavar="DEG",
+        help="peak frontal lean towards the stance foot [deg]",
+    )
+    p.add_argument(
+        "--tilt-profile",
+        choices=("hold", "sway"),
+        default="hold",
+        help="lean shape: cubic transfer in DSP and hold (default), or sway",
+    )
+    p.add_argument("--steps", type=int, default=4, metavar="N", help="number of steps (4)")
+
+
+def gait_from_args(args, spec):
+    """GaitParams from parsed flags (degrees → radians here)."""
+    from planner.trajectory import GaitParams
+
+    overrides = {
+        "slope": np.deg2rad(args.slope),
+        "steps": args.steps,
+        "tilt_profile": args.tilt_profile,
+    }
+    if args.hip_height is not None:
+        overrides["hip_height"] = args.hip_height
+    if args.swing_lift is not None:
+        overrides["swing_lift"] = args.swing_lift
+    if args.tilt is not None:
+        overrides["tilt"] = np.deg2rad(args.tilt)
+    return GaitParams.nominal(spec, args.step_time, **overrides)
+
+
+def _cmd_plan(args) -> None:
+    from bench.files import atomic_path
+    from planner.plan import plan_walk
+    from planner.spec import load_spec
+
+    spec = load_spec(args.robot)
+    plan = plan_walk(spec, gait_from_args(args, spec))
+    with atomic_path(args.out) as tmp, open(tmp, "wb") as f:
+        plan.save_npz(f)
+    summary = plan.summary()
+    p = plan.params
+    print(
+        f"plan: {spec.name}, {p.steps} steps of {p.step_time:g} s on "
+        f"{np.rad2deg(p.slope):g} deg, Hz {p.hip_height:.4f} m, lift {p.swing_lift:.4f} m, "
+        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.tilt_profile}), {plan.t.size} samples"
+    )
+    print(
+        f"verdict: {summary['verdict']}  (min ZMP margin {summary['min_margin_m'] * 1e3:.2f} mm"
+        f" at t = {summary['time_of_min_margin_s']:.3f} s)"
+    )
+    print(
+        f"work: {summary['work_J']:.4f} J   max friction ratio: "
+        f"{summary['max_friction_ratio']:.3f}   max |ZMP - LIPM|: "
+        f"{summary['max_lipm_distance_m'] * 1e3:.2f} mm"
+    )
+    print(
+        "peak torque [N m]: "
+        + ", ".join(f"{k} {v:.3f}" for k, v in summary["peak_torque_Nm"].items())
+    )
+    print(f"wrote {args.out}")
+
+
+def _cmd_benchmark(args) -> None:
+    from bench import benchmark
+
+    for name, value in benchmark.run(args.what).items():
+        print(f"{name}: {value:.6g}" if isinstance(value, float) else f"{name}: {value}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="slopewalk", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("plan", help="plan a walk analytically and write its time series")
+    _add_gait_flags(p)
+    p.add_argument("--out", required=True, metavar="FILE", help="output .npz")
+    p.set_defaults(run=_cmd_plan)
+
+    p = sub.add_parser("benchmark", help="print speed figures as name: value lines")
+    p.add_argument("what", choices=("planner",), help="what to measure")
+    p.set_defaults(run=_cmd_benchmark)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        args.run(args)
+    except SlopewalkError as err:
+        print(f"slopewalk: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("slopewalk: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
