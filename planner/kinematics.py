@@ -179,22 +179,46 @@ class Chain:
         Returns:
             Homogeneous transforms in S, shape (n, 10, 4, 4): frames 0..8 then the swing sole.
         """
-        n = np.asarray(q).shape[0]
-        out = np.empty((n, 10, 4, 4))
-        base = np.zeros((n, 4, 4))
-        base[:, :3, :3] = ROTATION_FRAME0_IN_SLOPE
-        base[:, :3, 3] = stance_foot
-        base[:, 2, 3] += self.ankle_height
-        base[:, 3, 3] = 1.0
-        out[:, 0] = base
-        steps = dh_transform(*self.dh_parameters(q, stance))
-        for i in range(N_JOINTS):
-            out[:, i + 1] = out[:, i] @ steps[:, i]
-        sole = np.eye(4)
-        sole[:3, :3] = ROTATION_SOLE_IN_FRAME8
-        sole[0, 3] = self.ankle_height  # x8 points from the ankle down to the sole
-        out[:, 9] = out[:, 8] @ sole
+        R, o = self.poses(q, stance_foot, stance)
+        n = R.shape[-1]
+        out = np.zeros((n, 10, 4, 4))
+        out[:, :, :3, :3] = R.transpose(3, 0, 1, 2)
+        out[:, :, :3, 3] = o.transpose(2, 0, 1)
+        out[:, :, 3, 3] = 1.0
         return out
+
+    def poses(self, q, stance_foot, stance) -> tuple[np.ndarray, np.ndarray]:
+        """``frames`` in sample-last layout, the fast path for large batches.
+
+        Composes eq. (1) row by row with the sample axis contiguous:
+        R_i = R_{i-1} RotX(α) RotZ(θ), o_i = o_{i-1} + R_{i-1} (a, −sα d, cα d).
+
+        Returns:
+            Rotations (10, 3, 3, n) (frame axes as columns) and origins (10, 3, n), in S.
+        """
+        q = np.asarray(q, dtype=float)
+        n = q.shape[0]
+        theta = (self.theta_sign * q + self.theta_offset).T  # (8, n)
+        d = self.d[np.asarray(stance)].T  # (8, n)
+        ct, st = np.cos(theta), np.sin(theta)
+        R = np.empty((10, 3, 3, n))
+        o = np.empty((10, 3, n))
+        R[0] = ROTATION_FRAME0_IN_SLOPE[:, :, None]
+        o[0] = np.asarray(stance_foot, dtype=float).T
+        o[0, 2] += self.ankle_height
+        for i in range(N_JOINTS):
+            ca, sa = np.cos(self.alpha[i]), np.sin(self.alpha[i])
+            x, y, z = R[i, :, 0], R[i, :, 1], R[i, :, 2]  # parent axes, (3, n) each
+            y_twisted = y * ca + z * sa if sa else y * ca
+            z_twisted = z * ca - y * sa if sa else z * ca
+            R[i + 1, :, 0] = x * ct[i] + y_twisted * st[i]
+            R[i + 1, :, 1] = y_twisted * ct[i] - x * st[i]
+            R[i + 1, :, 2] = z_twisted
+            o[i + 1] = o[i] + x * self.a[i] + z_twisted * d[i]
+        # swing sole: ankle_height along x8, axes (−z8, −y8, −x8)
+        R[9, :, 0], R[9, :, 1], R[9, :, 2] = -R[8, :, 2], -R[8, :, 1], -R[8, :, 0]
+        o[9] = o[8] + R[8, :, 0] * self.ankle_height
+        return R, o
 
     def link_coms(self, frames: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """CoM of the 9 links in S [m], shape (n, 9, 3), from ``frames`` (n, 10, 4, 4)."""

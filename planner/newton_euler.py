@@ -42,14 +42,6 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], axis=-1)
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", a, b)
-
-
-def _matvec(M: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("...ij,...j->...i", M, v)
-
-
 @dataclass(frozen=True)
 class Dynamics:
     """Result of the recursion over n samples, all vectors in S.
@@ -59,18 +51,21 @@ class Dynamics:
             applies to the child link about +axis (the MJCF sign).
         stance_force: Ground force on the stance foot [N], shape (n, 3).
         stance_moment: Ground moment on the stance foot about its sole point [N m], (n, 3).
+        com: Link CoM positions [m], (n, 9, 3).
         omega, omega_dot: Link angular velocity [rad/s] and acceleration [rad/s²], (n, 9, 3).
         com_acc: Link CoM accelerations [m/s²] (true, gravity not included), (n, 9, 3).
-        inertia: Link inertia about its CoM in S axes [kg m²], (n, 9, 3, 3).
+        momentum_rate: Rate of each link's angular momentum about its CoM,
+            Ḣ_i = I_i ω̇_i + ω_i × I_i ω_i [N m], (n, 9, 3).
     """
 
     tau: np.ndarray
     stance_force: np.ndarray
     stance_moment: np.ndarray
+    com: np.ndarray
     omega: np.ndarray
     omega_dot: np.ndarray
     com_acc: np.ndarray
-    inertia: np.ndarray
+    momentum_rate: np.ndarray
 
 
 def inverse_dynamics(
@@ -93,47 +88,89 @@ def inverse_dynamics(
     Returns:
         ``Dynamics``.
     """
+    R = np.ascontiguousarray(frames[:, :, :3, :3].transpose(1, 2, 3, 0))
+    o = np.ascontiguousarray(frames[:, :, :3, 3].transpose(1, 2, 0))
+    return inverse_dynamics_poses(chain, R, o, qd, qdd, stance, gravity)
+
+
+def inverse_dynamics_poses(chain, R, o, qd, qdd, stance, gravity) -> Dynamics:
+    """``inverse_dynamics`` on sample-last poses (``Chain.poses``), the fast path.
+
+    Every vector is a (3, n) array with the sample axis contiguous, so each
+    step of the recursion is a handful of whole-array operations.
+    """
     n = qd.shape[0]
-    R = frames[:, :9, :3, :3]
-    origin = frames[:, :9, :3, 3]
-    axis = R[:, 1:, :, 2] * chain.theta_sign[None, :, None]  # u_i, (n, 8, 3)
-    com_offset = np.einsum("nkij,nkj->nki", R, chain.com[stance])  # (n, 9, 3)
-    inertia = R @ chain.inertia[stance] @ np.swapaxes(R, -1, -2)
+    qd, qdd = qd.T, qdd.T
+    axis = [None] + [R[i, :, 2] * chain.theta_sign[i - 1] for i in range(1, 9)]  # u_i (3, n)
+    right = np.asarray(stance)[None, :] == 1
+    inertia = chain.inertia[0]  # (9, 3, 3) in DH axes; equal for both stance sides
+    omega, omega_dot, com_acc, com_offset = [], [], [], []
+    w = wd = np.zeros((3, n))
+    acc = np.broadcast_to(-np.asarray(gravity, dtype=float)[:, None], (3, n))  # gravity trick
+    for i in range(9):
+        if i:
+            spin = qd[i - 1] * axis[i]
+            r = o[i] - o[i - 1]
+            acc = acc + _cross(wd, r) + _cross(w, _cross(w, r))
+            w, wd = w + spin, wd + _cross(w, spin) + qdd[i - 1] * axis[i]
+        c = _rotate(R[i], np.where(right, chain.com[1, i][:, None], chain.com[0, i][:, None]))
+        omega.append(w)
+        omega_dot.append(wd)
+        com_offset.append(c)
+        com_acc.append(acc + _cross(wd, c) + _cross(w, _cross(w, c)))
+    momentum_rate = []
+    for i in range(9):
+        Iw = _rotate(R[i], inertia[i] @ _rotate_back(R[i], omega[i]))
+        Iwd = _rotate(R[i], inertia[i] @ _rotate_back(R[i], omega_dot[i]))
+        momentum_rate.append(Iwd + _cross(omega[i], Iw))
 
-    omega = np.zeros((n, 9, 3))
-    omega_dot = np.zeros((n, 9, 3))
-    acc = np.zeros((n, 9, 3))  # frame-origin accelerations, gravity trick included
-    acc[:, 0] = -gravity
-    for i in range(1, 9):
-        w, wd = omega[:, i - 1], omega_dot[:, i - 1]
-        spin = qd[:, i - 1, None] * axis[:, i - 1]
-        omega[:, i] = w + spin
-        omega_dot[:, i] = wd + cross(w, spin) + qdd[:, i - 1, None] * axis[:, i - 1]
-        r = origin[:, i] - origin[:, i - 1]
-        acc[:, i] = acc[:, i - 1] + cross(wd, r) + cross(w, cross(w, r))
-    com_acc = acc + cross(omega_dot, com_offset) + cross(omega, cross(omega, com_offset))
-    F = chain.mass[None, :, None] * com_acc
-    Iw = _matvec(inertia, omega)
-    N = _matvec(inertia, omega_dot) + cross(omega, Iw)
-
-    f = np.zeros((n, 3))  # f_{i+1}: force of link i+1 on link i ...
-    m = np.zeros((n, 3))  # ... and its moment about origin i+1
-    tau = np.empty((n, 8))
-    next_origin = origin[:, 8]
+    f = np.zeros((3, n))  # f_{i+1}: force of link i+1 on link i ...
+    m = np.zeros((3, n))  # ... and its moment about origin i+1 (o[9] is the swing sole)
+    tau = np.empty((8, n))
     for i in range(8, -1, -1):
-        f_next, m_next = f, m
-        f = F[:, i] + f_next
-        m = N[:, i] + cross(com_offset[:, i], F[:, i]) + m_next
-        m = m + cross(next_origin - origin[:, i], f_next)
+        F = chain.mass[i] * com_acc[i]
+        m = momentum_rate[i] + _cross(com_offset[i], F) + m + _cross(o[i + 1] - o[i], f)
+        f = F + f
         if i >= 1:
-            tau[:, i - 1] = _dot(m, axis[:, i - 1])
-        next_origin = origin[:, i]
-    stance_sole = origin[:, 0] - chain.ankle_height * frames[:, 0, :3, 0]  # x0 points up
-    stance_moment = m + cross(origin[:, 0] - stance_sole, f)
-    return Dynamics(tau, f, stance_moment, omega, omega_dot, com_acc + gravity, inertia)
+            tau[i - 1] = np.einsum("in,in->n", m, axis[i])
+    stance_sole = o[0] - chain.ankle_height * R[0, :, 0]  # x0 points up
+    stance_moment = m + _cross(o[0] - stance_sole, f)
+    com = [o[i] + com_offset[i] for i in range(9)]
+    return Dynamics(
+        tau.T,
+        f.T,
+        stance_moment.T,
+        _links(com),
+        _links(omega),
+        _links(omega_dot),
+        _links(com_acc) + gravity,
+        _links(momentum_rate),
+    )
 
 
-def swing_wrench_torques(chain: Chain, frames: np.ndarray, force, moment) -> np.ndarray:
+def _links(vectors: list[np.ndarray]) -> np.ndarray:
+    """Per-link (3, n) arrays → one (n, k, 3) array."""
+    return np.stack(vectors).transpose(2, 0, 1)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of (3, n) arrays."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
+def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """R v for R (3, 3, n) and v (3, n)."""
+    return R[:, 0] * v[0] + R[:, 1] * v[1] + R[:, 2] * v[2]
+
+
+def _rotate_back(R: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rᵀ v for R (3, 3, n) and v (3, n)."""
+    return R[0] * v[0] + R[1] * v[1] + R[2] * v[2]
+
+
+def swing_wrench_torques(chain: Chain, R, o, force, moment) -> np.ndarray:
     """Change of the joint torques when the ground also pushes on the swing foot.
 
     The inward recursion with only an external wrench (F, M) on link 8 at the
@@ -141,13 +178,16 @@ def swing_wrench_torques(chain: Chain, frames: np.ndarray, force, moment) -> np.
     τ_i = −u_i · [(s − o_i) × F + M] (a Jacobian-transpose product).
 
     Args:
-        frames: DH frames and swing sole in S, shape (n, 10, 4, 4).
+        R, o: Sample-last poses of frames 0..9 (``Chain.poses``), (10, 3, 3, n), (10, 3, n).
         force: Ground force on the swing foot [N], shape (n, 3), in S.
         moment: Ground moment about the swing sole point [N m], shape (n, 3), in S.
 
     Returns:
         Torque change [N m], shape (n, 8), to add to ``Dynamics.tau``.
     """
-    axis = frames[:, 1:9, :3, 2] * chain.theta_sign[None, :, None]
-    lever = frames[:, 9, None, :3, 3] - frames[:, 1:9, :3, 3]  # (n, 8, 3)
-    return -_dot(axis, cross(lever, force[:, None, :]) + moment[:, None, :])
+    F, M = force.T, moment.T
+    out = np.empty((8, F.shape[1]))
+    for i in range(1, 9):
+        axis = R[i, :, 2] * chain.theta_sign[i - 1]
+        out[i - 1] = -np.einsum("in,in->n", axis, _cross(o[9] - o[i], F) + M)
+    return out.T

@@ -27,7 +27,7 @@ import numpy as np
 from planner.ik import tilted_plane_height, two_link_ik
 from planner.joints import JOINT_NAMES, RIGHT, stance_swing_to_left_right
 from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import cross, inverse_dynamics, swing_wrench_torques
+from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
 from planner.spec import RobotSpec
 from planner.trajectory import Curve, GaitParams, Timeline, footprint_y
 from planner.zmp import (
@@ -255,21 +255,18 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
     stance_sole = np.stack(
         [flat(timeline.stance_x), feet_y[:, step].reshape(-1), np.zeros(P * n)], axis=1
     )
-    frames = chain.frames(q, stance_sole, stance)
-    dyn = inverse_dynamics(chain, frames, qd, qdd, stance, gravity)
+    R, o = chain.poses(q, stance_sole, stance)
+    dyn = inverse_dynamics_poses(chain, R, o, qd, qdd, stance, gravity)
 
     # DSP split: the swing foot takes the share 1 - s of the total wrench.
-    swing_sole = frames[:, 9, :3, 3]
+    swing_sole = o[9].T
     other = flat(1.0 - _stance_share(timeline))[:, None]
     swing_force = other * dyn.stance_force
     swing_moment = other * (dyn.stance_moment + cross(stance_sole - swing_sole, dyn.stance_force))
-    tau = dyn.tau + swing_wrench_torques(chain, frames, swing_force, swing_moment)
+    tau = dyn.tau + swing_wrench_torques(chain, R, o, swing_force, swing_moment)
 
-    coms = chain.link_coms(frames, stance)
-    momentum_rate = np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega_dot) + cross(
-        dyn.omega, np.einsum("nkij,nkj->nki", dyn.inertia, dyn.omega)
-    )
-    zmp = zmp_multibody(chain.mass, coms, dyn.com_acc, momentum_rate, gravity)
+    coms = dyn.com
+    zmp = zmp_multibody(chain.mass, coms, dyn.com_acc, dyn.momentum_rate, gravity)
     double = flat(~timeline.in_ssp)
     heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
     polygon = support_polygon(

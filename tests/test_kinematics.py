@@ -119,3 +119,22 @@ def test_joint_rates_are_derivatives_of_angles(spec):
 def test_unreachable_hip_height_names_time_and_distance(spec):
     with pytest.raises(UnreachableError, match=r"t = .* s: hip-ankle distance .* m"):
         plan_walk(spec, GaitParams.nominal(spec, 1.0, hip_height=0.30))
+
+
+def test_frames_are_the_product_of_eq1_transforms(spec):
+    """The fast frame composition equals ⁰T₁·¹T₂⋯ of eq. (1) matrices, for random poses."""
+    rng = np.random.default_rng(11)
+    n = 64
+    q = rng.uniform(-1.5, 1.5, (n, 8))
+    stance = rng.integers(0, 2, n)
+    sole = rng.uniform(-0.2, 0.2, (n, 3))
+    chain = Chain.from_spec(spec)
+    frames = chain.frames(q, sole, stance)
+    T = np.tile(np.eye(4), (n, 1, 1))
+    T[:, :3, 3] = sole + [0, 0, spec.ankle_height]
+    T[:, :3, :3] = [[0, 0, 1], [0, -1, 0], [1, 0, 0]]
+    np.testing.assert_allclose(frames[:, 0], T, atol=1e-15)
+    steps = dh_transform(*chain.dh_parameters(q, stance))
+    for i in range(8):
+        T = T @ steps[:, i]
+        np.testing.assert_allclose(frames[:, i + 1], T, atol=1e-14)
