@@ -1,0 +1,338 @@
+"""MJCF of the biped, built from the same ``RobotSpec`` as the planner's chain.
+
+Built with ``mujoco.MjSpec``, MuJoCo's own model-editing API: it ships with the
+``mujoco`` wheel (no second MJCF library to keep in step), compiles straight to an
+``MjModel`` and writes MJCF with ``to_xml``. Its writer prints 6 significant digits
+(exact for the spec's values; a test checks the text reproduces the compiled spec)
+and spells a position actuator ``<general>`` with gainprm kp, biasprm (0, −kp, −kv).
+
+``robot_xml`` is the pelvis-rooted biped: bodies named after their joints
+(``l_thigh`` carries ``l_hip_pitch``), frames as in ``planner/robots/bioloid.toml``,
+explicit inertials (geoms add no mass), position actuators, a ``home`` key.
+``scene_xml`` stands it on a plane tilted about world y by −slope (gravity stays
+vertical). ``stance_rooted_xml`` re-roots it at the stance foot for ``mj_inverse``.
+
+Contacts: condim 3 on an elliptic cone (the exact Coulomb cone, no pyramid facets),
+``impratio`` 10 so sticking feet creep less; the floor has ``priority`` 1, so its
+friction is the contact's. Robot geoms (contype 0, conaffinity 1) touch the floor,
+never each other, so a fall shows as a non-foot contact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from planner.errors import SlopewalkError
+from planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
+from planner.kinematics import rotation_slope_to_world
+from planner.spec import JOINT_KINDS, RobotSpec, load_spec
+from planner.trajectory import MAX_SLOPE, GaitParams
+
+ACTUATOR_MODES = ("stiff", "servo")
+_SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole
+_LEG_RADIUS = 0.015  # thigh/shank capsule radius [m] (AX-12A is 32 mm wide)
+
+
+class SceneError(SlopewalkError):
+    """A scene option outside its allowed range (slope, friction, actuator mode, step)."""
+
+
+@dataclass(frozen=True)
+class Servo:
+    """Joint and position-actuator settings of one servo class (simulation settings)."""
+
+    kp: float  # position gain [N m/rad]
+    kv: float  # velocity gain [N m s/rad]
+    force_limit: float  # symmetric actuator torque limit [N m]
+    damping: float = 0.0  # joint damping [N m s/rad]
+    armature: float = 0.0  # reflected rotor inertia [kg m²]
+    frictionloss: float = 0.0  # dry joint friction [N m]
+
+
+# ---- Simulation settings: the one place they live (robot numbers live in the spec). ----
+# AX-12A servo (ROBOTIS e-manual): gear ratio 254:1, proportional-only firmware whose
+# default CW/CCW compliance slope is 32 steps of 0.29 deg; over that band the output
+# rises to full torque, so kp = stall torque / 0.162 rad = 9.3 N m/rad. kv = 0: the
+# firmware has no D term; the motor's speed-dependent torque is the joint damping below.
+AX12_COMPLIANCE_SLOPE = np.deg2rad(32 * 0.29)  # [rad]
+# Reflected rotor inertia and dry friction are not published for the AX-12A. Estimates
+# scaled from the MuJoCo Menagerie ROBOTIS OP3 (XM430-W350, 353.5:1, 4.1 N m stall:
+# identified armature 0.045 kg m², frictionloss 0.03 N m): armature by the gear ratio
+# squared, friction by the stall torque.
+AX12_ARMATURE = 0.045 * (254 / 353.5) ** 2  # 0.0232 kg m²
+AX12_FRICTIONLOSS_PER_STALL = 0.03 / 4.1  # [N m per N m of stall torque]
+# Servo joint damping = stall torque / no-load speed (spec's [servo] table): the slope of
+# a DC motor's torque-speed line (back-EMF), present with or without a command (for the
+# XM430 this rule gives 0.85 N m s/rad; the OP3's identified value is 1.08).
+#
+# stiff: a stiff, unsaturated position loop that tracks the plan closely, for validating
+# the analytic model. It keeps the servo's armature: with a 1 ms step and no rotor
+# inertia, kp = 200 on the 0.1 kg foot chatters on the floor (the stance foot creeps).
+# Armature only adds A q̈ to each hinge's own equation, so for a tracked motion it changes
+# actuator torques, not the ground reaction the ZMP comes from. The loop lags the
+# command by about kv / kp = 10 ms (kv acts on the absolute joint speed).
+STIFF = Servo(kp=200.0, kv=2.0, force_limit=50.0, armature=AX12_ARMATURE)
+# Options: implicitfast integrates kv and joint damping implicitly; 1 ms resolves the stiff loop.
+TIMESTEP = 0.001  # [s], default of scene_xml
+INTEGRATOR = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+IMPRATIO = 10.0
+
+
+def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
+    """Joint and actuator settings of ``actuators`` mode ("stiff" or "servo") for ``spec``."""
+    if actuators not in ACTUATOR_MODES:
+        raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
+    if actuators == "stiff":
+        return STIFF
+    return Servo(
+        kp=spec.stall_torque / AX12_COMPLIANCE_SLOPE,
+        kv=0.0,
+        force_limit=spec.stall_torque,
+        damping=spec.stall_torque / spec.no_load_speed,
+        armature=AX12_ARMATURE,
+        frictionloss=AX12_FRICTIONLOSS_PER_STALL * spec.stall_torque,
+    )
+
+
+def robot_xml(spec: RobotSpec, *, actuators: str = "stiff") -> str:
+    """MJCF text of the pelvis-rooted biped (see module doc)."""
+    return build_robot(spec, actuators=actuators).to_xml()
+
+
+def build_robot(spec: RobotSpec, *, actuators: str = "stiff") -> mujoco.MjSpec:
+    """The pelvis-rooted biped as an ``MjSpec`` (``compile()`` it for full precision)."""
+    mjs = _new_spec(spec.name)
+    mjs.option.timestep, mjs.option.integrator = TIMESTEP, INTEGRATOR  # the stiff loop needs them
+    _add_robot(mjs, spec, servo_settings(spec, actuators))
+    return mjs
+
+
+def scene_xml(
+    spec: RobotSpec,
+    *,
+    slope: float = 0.0,
+    friction: float = 1.0,
+    actuators: str = "stiff",
+    timestep: float = TIMESTEP,
+) -> str:
+    """Self-contained MJCF text of the biped standing (``home`` key) on a tilted plane.
+
+    Args:
+        spec: The robot.
+        slope: Plane inclination θs [rad] in (−60°, 60°); the plane turns about world y
+            by −θs, so slope-frame x goes uphill. Gravity stays (0, 0, −9.81).
+        friction: Coulomb friction coefficient μ of the foot-plane contact, > 0.
+        actuators: "stiff" or "servo" (``servo_settings``).
+        timestep: Simulation step [s], > 0.
+
+    Raises:
+        SceneError: a value outside its range, named in one line.
+    """
+    if not abs(slope) < MAX_SLOPE:
+        raise SceneError(f"slope {np.rad2deg(slope):.4g} deg: must lie in (-60, 60) deg")
+    if not friction > 0:
+        raise SceneError(f"friction {friction!r}: must be > 0")
+    if not timestep > 0:
+        raise SceneError(f"timestep {timestep!r} s: must be > 0")
+    servo = servo_settings(spec, actuators)
+    mjs = _new_spec(f"{spec.name} on {np.rad2deg(slope):.4g} deg")
+    _add_world(mjs, slope=slope, friction=friction, timestep=timestep)
+    pelvis = _add_robot(mjs, spec, servo)
+    # Stand the home pose on the tilted plane: its pelvis pose is in S; turn it into W.
+    R = rotation_slope_to_world(slope)
+    pelvis.pos, pelvis.quat = R @ pelvis.pos, _quat(R)
+    key = mjs.key("home")
+    key.qpos = np.concatenate([pelvis.pos, pelvis.quat, list(key.qpos)[7:]])
+    return mjs.to_xml()
+
+
+def stance_rooted_xml(spec: RobotSpec, stance: int) -> str:
+    """MJCF text of the chain rooted at the stance foot, for ``mj_inverse``.
+
+    The world frame of this model is the slope frame S (set ``opt.gravity`` to
+    ``gravity_in_slope(slope)``). Root: the stance foot (free joint at its ankle
+    centre, so the sole point is the world origin at zero pose), then ankle cross,
+    shank, thigh, pelvis, swing thigh, shank, ankle cross, foot; every body frame as
+    in the pelvis-rooted model. Hinges are named and ordered as ``joints.JOINT_NAMES``
+    and each angle equals the planner's q: the stance leg is walked from foot to hip,
+    so its axes are negated (−x roll, −y pitch) and its joints sit at the far end of
+    each child body. Generalized forces are then the planner's torques. No geoms, no
+    limits, no damping or armature; constraints disabled.
+
+    Args:
+        stance: 0 left / 1 right.
+    """
+    if stance not in (0, 1):
+        raise SceneError(f"stance {stance!r}: must be 0 (left) or 1 (right)")
+    mjs = _new_spec(f"{spec.name} stance {SIDE_PREFIX[stance]}foot")
+    mjs.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
+    st, sw = SIDE_PREFIX[stance], SIDE_PREFIX[1 - stance]
+    y_hip = (spec.hip_width if stance == LEFT else -spec.hip_width) / 2  # in pelvis frame
+    L1, L2 = spec.thigh, spec.shank
+    # (body, link, is right leg, body pos in parent, joint pos in body, axis), q = 0 pose
+    chain = [
+        (f"{st}ankle", "ankle", stance, (0, 0, 0), (0, 0, 0), (-1, 0, 0)),
+        (f"{st}shank", "shank", stance, (0, 0, L2), (0, 0, -L2), (0, -1, 0)),
+        (f"{st}thigh", "thigh", stance, (0, 0, L1), (0, 0, -L1), (0, -1, 0)),
+        ("pelvis", "pelvis", 0, (0, -y_hip, 0), (0, y_hip, 0), (0, -1, 0)),
+        (f"{sw}thigh", "thigh", 1 - stance, (0, -y_hip, 0), (0, 0, 0), (0, 1, 0)),
+        (f"{sw}shank", "shank", 1 - stance, (0, 0, -L1), (0, 0, 0), (0, 1, 0)),
+        (f"{sw}ankle", "ankle", 1 - stance, (0, 0, -L2), (0, 0, 0), (0, 1, 0)),
+        (f"{sw}foot", "foot", 1 - stance, (0, 0, 0), (0, 0, 0), (1, 0, 0)),
+    ]
+    body = mjs.worldbody.add_body(name=f"{st}foot", pos=[0, 0, spec.ankle_height])
+    body.add_freejoint(name="root")
+    _set_inertial(body, spec, "foot", stance == 1)
+    for (name, link, right, pos, joint_pos, axis), joint in zip(chain, JOINT_NAMES, strict=True):
+        body = body.add_body(name=name, pos=list(pos))
+        _set_inertial(body, spec, link, right == 1)
+        body.add_joint(name=joint, pos=list(joint_pos), axis=list(axis))
+    return mjs.to_xml()
+
+
+def write_default_mjcf(directory: str | Path) -> tuple[Path, Path]:
+    """(Re)write ``biped.xml`` and ``scene.xml`` (flat, includes the biped) for the default spec.
+
+    Returns:
+        Paths of the two files.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    robot, scene = directory / "biped.xml", directory / "scene.xml"
+    robot.write_text(robot_xml(load_spec()))
+    world = _new_spec("biped scene")
+    _add_world(world, slope=0.0, friction=1.0, timestep=TIMESTEP)
+    lines = world.to_xml().splitlines(keepends=True)
+    scene.write_text(lines[0] + '  <include file="biped.xml"/>\n\n' + "".join(lines[1:]))
+    return robot, scene
+
+
+def home_pose(spec: RobotSpec) -> tuple[float, np.ndarray]:
+    """Standing pose at the planner's nominal hip height, feet flat under the hips.
+
+    Returns:
+        (pelvis height above the sole [m], (hip pitch, knee, ankle pitch, ankle roll) [rad]).
+    """
+    reach = spec.ankle_height + spec.thigh + spec.shank
+    height = min(GaitParams.nominal(spec, 1.0).hip_height, reach)
+    D, L1, L2 = height - spec.ankle_height, spec.thigh, spec.shank
+    knee = np.pi - np.arccos(np.clip((L1**2 + L2**2 - D**2) / (2 * L1 * L2), -1, 1))
+    lean = np.arccos(np.clip((L1**2 + D**2 - L2**2) / (2 * L1 * D), -1, 1))
+    return height, np.array([-lean, knee, lean - knee, 0.0])
+
+
+def _new_spec(name: str) -> mujoco.MjSpec:
+    mjs = mujoco.MjSpec()
+    mjs.modelname = name
+    mjs.comment = " Generated by slopewalk bench/model.py; do not edit by hand. "
+    mjs.compiler.degree = False
+    mjs.compiler.autolimits = True
+    mjs.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    return mjs
+
+
+def _add_world(mjs: mujoco.MjSpec, *, slope: float, friction: float, timestep: float) -> None:
+    """Options, floor texture, light and the tilted floor plane (its pose is S in the world)."""
+    mjs.option.timestep = timestep
+    mjs.option.integrator = INTEGRATOR
+    mjs.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    mjs.option.impratio = IMPRATIO
+    mjs.add_texture(
+        name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D, width=300, height=300,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, rgb1=[0.2, 0.3, 0.4], rgb2=[0.1, 0.2, 0.3],
+    )  # fmt: skip
+    mjs.add_material(name="grid", texrepeat=[10, 10], reflectance=0.1).textures[1] = "grid"
+    mjs.worldbody.add_light(
+        name="sun", pos=[0, 0, 2], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+    )
+    mjs.worldbody.add_geom(
+        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="grid",
+        quat=_quat(rotation_slope_to_world(slope)), friction=[friction, 0.005, 0.0001],
+        condim=3, priority=1,
+    )  # fmt: skip
+
+
+def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsBody:
+    """Defaults, bodies, sites, actuators and the home key of the pelvis-rooted biped."""
+    main = mjs.add_default("bioloid", mjs.default)
+    main.geom.contype, main.geom.conaffinity, main.geom.group = 0, 1, 2
+    main.geom.rgba = [0.25, 0.25, 0.28, 1]
+    main.site.group, main.site.size, main.site.rgba = 5, [0.004, 0, 0], [1, 0.4, 0, 1]
+    foot = mjs.add_default("foot", main)
+    foot.geom.type, foot.geom.rgba = mujoco.mjtGeom.mjGEOM_BOX, [0.6, 0.6, 0.65, 1]
+    ax12 = mjs.add_default("ax12", main)
+    ax12.joint.damping = [servo.damping, 0, 0]
+    ax12.joint.armature, ax12.joint.frictionloss = servo.armature, servo.frictionloss
+    ax12.actuator.set_to_position(kp=servo.kp, kv=servo.kv)
+    ax12.actuator.forcerange = [-servo.force_limit, servo.force_limit]
+    for kind in JOINT_KINDS:
+        cls = mjs.add_default(kind, ax12)
+        cls.joint.range = cls.actuator.ctrlrange = list(spec.joint_limits[kind])
+
+    height, home = home_pose(spec)
+    pelvis = mjs.worldbody.add_body(name="pelvis", pos=[0, 0, height], childclass="bioloid")
+    pelvis.add_freejoint(name="root")
+    _set_inertial(pelvis, spec, "pelvis", False)
+    hw = spec.hip_width / 2
+    pelvis.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.025, hw + 0.015, 0.02], pos=[0, 0, 0.02]
+    )
+    heel, toe, sole = spec.heel_offset, spec.ankle_to_toe, -spec.ankle_height
+    half_sole = [spec.foot_length / 2, spec.foot_width / 2, _SOLE_THICKNESS / 2]
+    for side, pre in enumerate(SIDE_PREFIX):
+        right = side == 1
+        thigh = pelvis.add_body(name=f"{pre}thigh", pos=[0, -hw if right else hw, 0])
+        shank = thigh.add_body(name=f"{pre}shank", pos=[0, 0, -spec.thigh])
+        ankle = shank.add_body(name=f"{pre}ankle", pos=[0, 0, -spec.shank])
+        foot_body = ankle.add_body(name=f"{pre}foot")
+        for body, link, kind in zip(
+            (thigh, shank, ankle, foot_body), ("thigh", "shank", "ankle", "foot"), JOINT_KINDS,
+            strict=True,
+        ):  # fmt: skip
+            _set_inertial(body, spec, link, right)
+            axis = [1, 0, 0] if kind == "ankle_roll" else [0, 1, 0]
+            body.add_joint(mjs.find_default(kind), name=f"{pre}{kind}", axis=axis)
+            mjs.add_actuator(
+                mjs.find_default(kind), name=f"{pre}{kind}", target=f"{pre}{kind}",
+                trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            )  # fmt: skip
+            if kind in _SITE:
+                body.add_site(name=f"{pre}{_SITE[kind]}")
+        for body, length in ((thigh, spec.thigh), (shank, spec.shank)):
+            body.add_geom(
+                name=body.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+                fromto=[0, 0, 0, 0, 0, -length], size=[_LEG_RADIUS, 0, 0],
+            )  # fmt: skip
+        foot_body.add_geom(
+            mjs.find_default("foot"), name=f"{pre}foot", size=half_sole,
+            pos=[(toe - heel) / 2, 0, sole + _SOLE_THICKNESS / 2],
+        )  # fmt: skip
+        for name, x in (("sole", 0.0), ("toe", toe), ("heel", -heel)):
+            foot_body.add_site(name=f"{pre}{name}", pos=[x, 0, sole])
+    legs = np.tile(home, 2)
+    mjs.add_key(name="home", qpos=[0, 0, height, 1, 0, 0, 0, *legs], ctrl=legs)
+    return pelvis
+
+
+# Sites at body origins, named after the physical joint there (the foot's is the ankle's).
+_SITE = {"hip_pitch": "hip", "knee": "knee", "ankle_pitch": "ankle"}
+
+
+def _set_inertial(body: mujoco.MjsBody, spec: RobotSpec, link: str, right: bool) -> None:
+    """Explicit inertial of ``link`` (the spec gives the left leg; the right mirrors y)."""
+    inertial = spec.links[link]
+    com = np.array(inertial.com)
+    if right:
+        com[1] = -com[1]
+    body.mass, body.ipos, body.inertia = inertial.mass, com, list(inertial.inertia)
+    body.explicitinertial = True
+
+
+def _quat(R: np.ndarray) -> np.ndarray:
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R).reshape(-1))
+    return quat

@@ -1,0 +1,295 @@
+"""The MJCF against the planner: same spec, same kinematics, same inverse dynamics.
+
+MuJoCo is the reference. Kinematics: the pelvis-rooted scene (plane tilted in the
+world) posed from the planner's joint angles; its sites, CoMs and body rotations,
+turned back into the slope frame S, match the DH chain. Dynamics: ``mj_inverse``
+on the stance-rooted model, whose world frame is S (gravity set to its S
+components), matches Newton-Euler torques and the ground wrench.
+"""
+
+from dataclasses import replace
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from bench.model import (
+    SceneError,
+    build_robot,
+    robot_xml,
+    scene_xml,
+    stance_rooted_xml,
+    write_default_mjcf,
+)
+from planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
+from planner.kinematics import CHAIN_LINKS, Chain, gravity_in_slope, rotation_slope_to_world
+from planner.newton_euler import inverse_dynamics
+from planner.plan import plan_walk
+from planner.spec import LinkInertial
+from planner.trajectory import GaitParams
+
+MJCF_DIR = Path(__file__).resolve().parents[1] / "mjcf"
+SLOPES = (0.0, np.deg2rad(15.0))  # [rad]
+STRIDE = 7  # subsample the 1 kHz plans
+
+
+# Lateral and fore-aft CoM offsets (the Bioloid's are all in the sagittal plane), so the
+# left/right mirroring of link inertials is exercised too.
+OFFSETS = {
+    "pelvis": (0.004, 0.003, 0.03),
+    "thigh": (0.003, 0.006, -0.07),
+    "shank": (-0.002, -0.005, -0.07),
+    "ankle": (0.001, 0.002, -0.001),
+    "foot": (0.004, 0.005, -0.015),
+}
+SPECS = ("bioloid", "offset_coms")
+
+
+@pytest.fixture(scope="module")
+def robots(spec) -> dict:
+    """By name: (spec, chain, {slope: nominal 1 s-step walk})."""
+    offset = replace(
+        spec,
+        links={
+            name: LinkInertial(name, link.mass, OFFSETS[name], link.inertia)
+            for name, link in spec.links.items()
+        },
+    )
+    out = {}
+    for name, robot in zip(SPECS, (spec, offset), strict=True):
+        walks = {s: plan_walk(robot, GaitParams.nominal(robot, 1.0, slope=s)) for s in SLOPES}
+        out[name] = (robot, Chain.from_spec(robot), walks)
+    return out
+
+
+def _all_models(spec) -> dict[str, str]:
+    models = {"robot": robot_xml(spec)}
+    for actuators in ("stiff", "servo"):
+        for slope in SLOPES:
+            name = f"scene {actuators} {np.rad2deg(slope):g} deg"
+            models[name] = scene_xml(spec, slope=slope, actuators=actuators)
+    for stance in (0, 1):
+        models[f"stance-rooted {SIDE_PREFIX[stance]}"] = stance_rooted_xml(spec, stance)
+    return models
+
+
+def test_every_model_steps_one_second_without_warnings(spec):
+    for name, xml in _all_models(spec).items():
+        model = mujoco.MjModel.from_xml_string(xml)
+        data = mujoco.MjData(model)
+        if model.nkey:
+            mujoco.mj_resetDataKeyframe(model, data, 0)
+        for _ in range(round(1.0 / model.opt.timestep)):
+            mujoco.mj_step(model, data)
+        warnings = {mujoco.mjtWarning(i).name: w.number for i, w in enumerate(data.warning)}
+        assert not any(warnings.values()), f"{name}: {warnings}"
+        assert np.all(np.isfinite(data.qpos)), name
+
+
+def test_committed_mjcf_is_what_the_default_spec_generates(spec, tmp_path):
+    robot, scene = write_default_mjcf(tmp_path)
+    for generated in (robot, scene):
+        committed = MJCF_DIR / generated.name
+        assert committed.read_text() == generated.read_text(), (
+            f"{committed} drifted from bench.model; run bench.model.write_default_mjcf('mjcf')"
+        )
+        mujoco.MjModel.from_xml_path(str(committed))
+    assert (MJCF_DIR / "biped.xml").read_text() == robot_xml(spec)
+
+
+def test_written_xml_reproduces_the_compiled_spec(spec):
+    """MuJoCo's writer keeps 6 significant digits: enough for the spec's numbers."""
+    direct = build_robot(spec).compile()
+    from_xml = mujoco.MjModel.from_xml_string(robot_xml(spec))
+    for field in ("body_pos", "body_quat", "body_ipos", "body_mass", "body_inertia",
+                  "jnt_axis", "jnt_range", "site_pos", "geom_pos", "geom_size"):  # fmt: skip
+        np.testing.assert_allclose(
+            getattr(from_xml, field), getattr(direct, field), rtol=1e-12, atol=1e-15, err_msg=field
+        )
+    assert from_xml.body_mass.sum() == pytest.approx(spec.total_mass, rel=1e-12)
+
+
+def _pelvis_pose(frames: np.ndarray, frames_zero: np.ndarray):
+    """Pelvis origin (midway between DH frames 4 and 5, the hips) and rotation, in S.
+
+    The pelvis body is S-aligned at q = 0 and rigid with DH frame 4, so its rotation is
+    R4(q) R4(0)ᵀ.
+    """
+    origin = (frames[:, 4, :3, 3] + frames[:, 5, :3, 3]) / 2
+    return origin, frames[:, 4, :3, :3] @ frames_zero[4, :3, :3].T
+
+
+def _planner_points(spec, frames, stance, stance_sole) -> dict[str, np.ndarray]:
+    """Positions in S of the MJCF's sites from the DH frames, by site name, each (n, 3)."""
+    toe, heel = np.array([spec.ankle_to_toe, 0, 0]), np.array([-spec.heel_offset, 0, 0])
+    stance_points = {
+        "ankle": frames[:, 0, :3, 3],
+        "knee": frames[:, 3, :3, 3],
+        "hip": frames[:, 4, :3, 3],
+        "sole": stance_sole,
+        "toe": stance_sole + toe,  # the stance foot lies flat, S-aligned
+        "heel": stance_sole + heel,
+    }
+    swing_points = {
+        "hip": frames[:, 5, :3, 3],
+        "knee": frames[:, 6, :3, 3],
+        "ankle": frames[:, 8, :3, 3],
+        "sole": frames[:, 9, :3, 3],
+        "toe": frames[:, 9, :3, 3] + frames[:, 9, :3, :3] @ toe,
+        "heel": frames[:, 9, :3, 3] + frames[:, 9, :3, :3] @ heel,
+    }
+    out = {}
+    for name in stance_points:
+        for side, prefix in enumerate(SIDE_PREFIX):
+            is_stance = (stance == side)[:, None]
+            out[prefix + name] = np.where(is_stance, stance_points[name], swing_points[name])
+    return out
+
+
+def _body_name(role: str, link: str, stance: int) -> str:
+    if role == "pelvis":
+        return "pelvis"
+    side = stance if role == "stance" else 1 - stance
+    return SIDE_PREFIX[side] + link
+
+
+@pytest.mark.parametrize("name", SPECS)
+@pytest.mark.parametrize("slope", SLOPES, ids=["flat", "slope15"])
+def test_kinematics_match_the_dh_chain(robots, name, slope):
+    spec, chain, walks = robots[name]
+    plan = walks[slope]
+    keep = np.arange(0, plan.t.size, STRIDE)
+    stance, stance_sole = plan.stance[keep], plan.stance_sole[keep]
+    frames = chain.frames(plan.q[keep], stance_sole, stance)
+    frames_zero = chain.frames(np.zeros((1, 8)), np.zeros((1, 3)), np.zeros(1, int))[0]
+    points = _planner_points(spec, frames, stance, stance_sole)
+    coms = chain.link_coms(frames, stance)  # (n, 9, 3)
+    pelvis_origin, pelvis_rotation = _pelvis_pose(frames, frames_zero)
+    q_lr = plan.q_left_right[keep]
+
+    model = mujoco.MjModel.from_xml_string(scene_xml(spec, slope=slope))
+    data = mujoco.MjData(model)
+    R_sw = rotation_slope_to_world(slope)
+    hinge_adr = [model.joint(name).qposadr[0] for name in MJCF_JOINTS]
+    errors = {"site": 0.0, "com": 0.0, "rotation": 0.0}
+    for k in range(keep.size):
+        data.qpos[:3] = R_sw @ pelvis_origin[k]
+        mujoco.mju_mat2Quat(data.qpos[3:7], (R_sw @ pelvis_rotation[k]).reshape(-1))
+        data.qpos[hinge_adr] = q_lr[k]
+        mujoco.mj_kinematics(model, data)
+        for site, p in points.items():
+            mj = R_sw.T @ data.site(site).xpos
+            errors["site"] = max(errors["site"], np.abs(mj - p[k]).max())
+        for i, (role, link) in enumerate(CHAIN_LINKS):
+            body = data.body(_body_name(role, link, stance[k]))
+            errors["com"] = max(errors["com"], np.abs(R_sw.T @ body.xipos - coms[k, i]).max())
+            R_planner = frames[k, i, :3, :3] @ frames_zero[i, :3, :3].T
+            R_mj = R_sw.T @ body.xmat.reshape(3, 3)
+            errors["rotation"] = max(errors["rotation"], np.abs(R_mj - R_planner).max())
+    print(f"{name}, slope {np.rad2deg(slope):g} deg, max abs errors: {errors}")
+    assert errors["site"] < 1e-9 and errors["com"] < 1e-9 and errors["rotation"] < 1e-9, errors
+
+
+@pytest.mark.parametrize("name", SPECS)
+@pytest.mark.parametrize("slope", SLOPES, ids=["flat", "slope15"])
+def test_inverse_dynamics_match_mj_inverse(robots, name, slope):
+    spec, chain, walks = robots[name]
+    plan = walks[slope]
+    gravity = gravity_in_slope(slope)
+    single = np.flatnonzero(~plan.double_support)[::STRIDE]
+    assert set(plan.stance[single]) == {0, 1}
+    q, qd, qdd = plan.q[single], plan.qd[single], plan.qdd[single]
+    stance, sole = plan.stance[single], plan.stance_sole[single]
+    frames = chain.frames(q, sole, stance)
+    dyn = inverse_dynamics(chain, frames, qd, qdd, stance, gravity)
+    # In single support the plan's torques are the recursion's (no load split).
+    np.testing.assert_allclose(plan.tau[single], dyn.tau, rtol=0, atol=1e-12)
+
+    tau = np.empty_like(dyn.tau)
+    force, moment = np.empty((single.size, 3)), np.empty((single.size, 3))
+    for side in (0, 1):
+        model = mujoco.MjModel.from_xml_string(stance_rooted_xml(spec, side))
+        model.opt.gravity[:] = gravity  # this model's world frame is S
+        data = mujoco.MjData(model)
+        hinges = [model.joint(name).dofadr[0] for name in JOINT_NAMES]
+        foot = model.body(f"{SIDE_PREFIX[side]}foot").id
+        for k in np.flatnonzero(stance == side):
+            data.qpos[:7] = [*(sole[k] + [0, 0, spec.ankle_height]), 1, 0, 0, 0]
+            data.qpos[7:] = q[k]
+            data.qvel[:] = 0
+            data.qacc[:] = 0
+            data.qvel[hinges], data.qacc[hinges] = qd[k], qdd[k]
+            mujoco.mj_inverse(model, data)
+            tau[k] = data.qfrc_inverse[hinges]
+            # Free joint: force in the world frame at the body origin (the ankle
+            # centre), moment in the body frame; moved to the sole point here.
+            force[k] = data.qfrc_inverse[:3]
+            moment_origin = data.xmat[foot].reshape(3, 3) @ data.qfrc_inverse[3:6]
+            moment[k] = moment_origin + np.cross(data.xpos[foot] - sole[k], force[k])
+    relative = np.abs(tau - dyn.tau) / np.maximum(np.abs(tau), 1e-3)  # 1 mN m floor
+    d_force, d_moment = force - dyn.stance_force, moment - dyn.stance_moment
+    print(
+        f"{name}, slope {np.rad2deg(slope):g} deg: max |dtau| {np.abs(tau - dyn.tau).max():.3g}"
+        f" N m, max rel {relative.max():.3g}; max |dF| {np.abs(d_force).max():.3g} N,"
+        f" max |dM| {np.abs(d_moment).max():.3g} N m"
+    )
+    np.testing.assert_allclose(dyn.tau, tau, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(dyn.stance_force, force, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(dyn.stance_moment, moment, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"slope": np.deg2rad(60.0)}, "slope 60 deg: must lie in (-60, 60) deg"),
+        ({"slope": np.deg2rad(-75.0)}, "slope -75 deg"),
+        ({"friction": 0.0}, "friction 0.0: must be > 0"),
+        ({"friction": float("nan")}, "friction nan"),
+        ({"actuators": "soft"}, "actuators 'soft': must be one of stiff, servo"),
+        ({"timestep": -1e-3}, "timestep -0.001 s"),
+    ],
+)
+def test_bad_scene_options_are_refused_in_one_line(spec, options, message):
+    with pytest.raises(SceneError) as error:
+        scene_xml(spec, **options)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_bad_stance_is_refused(spec):
+    with pytest.raises(SceneError, match="stance 2"):
+        stance_rooted_xml(spec, 2)
+
+
+@pytest.mark.parametrize("actuators", ["stiff", "servo"])
+def test_home_pose_stands_still(spec, actuators):
+    """Flat feet, no chatter: after 1 s at the home key the soles have not crept."""
+    model = mujoco.MjModel.from_xml_string(scene_xml(spec, actuators=actuators))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    soles = np.array([data.site(f"{p}sole").xpos for p in SIDE_PREFIX])
+    for _ in range(1000):
+        mujoco.mj_step(model, data)
+    crept = np.array([data.site(f"{p}sole").xpos for p in SIDE_PREFIX]) - soles
+    assert np.abs(crept).max() < 1e-3, crept
+    assert np.abs(data.qvel).max() < 1e-2, data.qvel
+
+
+def test_home_key_puts_both_soles_on_the_tilted_plane_with_the_scene_friction(spec):
+    slope, mu = np.deg2rad(15.0), 0.35
+    model = mujoco.MjModel.from_xml_string(scene_xml(spec, slope=slope, friction=mu))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    R_sw = rotation_slope_to_world(slope)
+    for prefix in SIDE_PREFIX:
+        for site in ("sole", "toe", "heel"):
+            assert abs((R_sw.T @ data.site(prefix + site).xpos)[2]) < 1e-5  # 6-digit key
+    for _ in range(100):  # settle into the soft contact
+        mujoco.mj_step(model, data)
+    floor = model.geom("floor").id
+    contacts = data.contact[: data.ncon]
+    feet = {model.geom(f"{p}foot").id for p in SIDE_PREFIX}
+    assert data.ncon == 8 and all({floor, *feet} >= set(c.geom) for c in contacts)
+    assert all(c.dim == 3 and c.friction[0] == pytest.approx(mu) for c in contacts)
