@@ -1,0 +1,174 @@
+"""Play a planned walk open loop through the MJCF biped's position actuators.
+
+The robot is placed at the plan's first pose with both soles flat on the tilted
+plane (the plan is in the slope frame S, whose origin is the world origin), held
+there for ``settle`` seconds, then the actuators are driven with the planned
+joint angles (linearly interpolated to the simulation step), and finally held at
+the last pose for ``hold`` seconds.
+
+The whole trial is one ``mujoco.rollout`` call: the control sequence is known in
+advance (open loop) and everything recorded is a sensor (``contact.py``), so
+MuJoCo runs it in C and many trials can share threads (``play_many``). Sensor
+rows are computed in each step's forward pass, i.e. row k describes the state at
+the start of step k; that is the time base used here.
+
+Divergence: when MuJoCo meets a bad acceleration it warns and resets the state,
+which shows as the rollout's time running backwards; the recording is cut there
+and marked ``diverged``. No exception escapes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from bench.contact import TrialSensors, add_trial_sensors, decode
+from bench.model import scene_xml, servo_settings
+from planner.kinematics import Chain, rotation_slope_to_world
+from planner.plan import Plan
+
+SETTLE_TIME = 0.5  # [s] hold at the first pose before the walk
+HOLD_TIME = 0.5  # [s] hold at the last pose after the walk
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Simulated series of one trial; time 0 is the start of the planned walk.
+
+    Attributes:
+        t: Time of each row [s], (m,).
+        q_ref: Commanded joint angles, MJCF order [rad], (m, 8).
+        sensors: Decoded sensor series (``contact.TrialSensors``), in S.
+        force_limit: Actuator torque limit [N m].
+        diverged_at: Time the simulation blew up [s], or None.
+    """
+
+    t: np.ndarray
+    q_ref: np.ndarray
+    sensors: TrialSensors
+    force_limit: float
+    diverged_at: float | None
+
+
+def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float):
+    """Compile the scene for ``plan`` (its robot and slope) with the trial sensors."""
+    xml = scene_xml(
+        plan.spec,
+        slope=plan.params.slope,
+        friction=friction,
+        actuators=actuators,
+        timestep=timestep,
+    )
+    mjs = mujoco.MjSpec.from_string(xml)
+    add_trial_sensors(mjs)
+    return mjs.compile()
+
+
+def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:
+    """Full physics state with the robot at the plan's first pose, soles on the plane."""
+    chain = Chain.from_spec(plan.spec)
+    frames = chain.frames(plan.q[:1], plan.stance_sole[:1], plan.stance[:1])[0]
+    frames_zero = chain.frames(np.zeros((1, 8)), np.zeros((1, 3)), plan.stance[:1])[0]
+    R_ws = rotation_slope_to_world(plan.params.slope)
+    pelvis_in_slope = (frames[4, :3, 3] + frames[5, :3, 3]) / 2
+    pelvis_rotation = frames[4, :3, :3] @ frames_zero[4, :3, :3].T  # body is S-aligned at q = 0
+    data = mujoco.MjData(model)
+    data.qpos[:3] = R_ws @ pelvis_in_slope
+    mujoco.mju_mat2Quat(data.qpos[3:7], (R_ws @ pelvis_rotation).reshape(-1))
+    data.qpos[7:15] = plan.q_left_right[0]
+    data.ctrl[:] = plan.q_left_right[0]
+    mujoco.mj_forward(model, data)
+    state = np.empty(mujoco.mj_stateSize(model, _STATE))
+    mujoco.mj_getState(model, data, state, _STATE)
+    return state
+
+
+def control_sequence(plan: Plan, timestep: float, settle: float, hold: float):
+    """Row times [s] (walk starts at 0) and commanded angles, MJCF order, (m, 8)."""
+    m = int(round((settle + plan.t[-1] + hold) / timestep))
+    t = np.arange(m) * timestep - settle
+    q_ref = np.column_stack([np.interp(t, plan.t, plan.q_left_right[:, j]) for j in range(8)])
+    return t, q_ref
+
+
+def play(
+    plan: Plan,
+    *,
+    friction: float = 1.0,
+    actuators: str = "stiff",
+    timestep: float = 0.001,
+    settle: float = SETTLE_TIME,
+    hold: float = HOLD_TIME,
+) -> Recording:
+    """Simulate ``plan`` and record it (see module doc).
+
+    Args:
+        plan: The analytic walk to play.
+        friction: Coulomb μ of the feet on the plane, > 0.
+        actuators: "stiff" or "servo".
+        timestep: Simulation step [s].
+        settle, hold: Hold times before and after the walk [s].
+    """
+    return play_many(
+        [plan],
+        friction=[friction],
+        actuators=[actuators],
+        timestep=timestep,
+        settle=settle,
+        hold=hold,
+        threads=1,
+    )[0]
+
+
+def play_many(
+    plans,
+    *,
+    friction,
+    actuators,
+    timestep=0.001,
+    settle=SETTLE_TIME,
+    hold=HOLD_TIME,
+    threads: int = 1,
+) -> list[Recording]:
+    """Simulate several plans, trials sharing ``threads`` MuJoCo threads.
+
+    Trials with the same scene (robot, slope, friction, actuators) and length
+    share one ``rollout`` call; each scene is compiled once.
+    """
+    groups: dict[tuple, list[int]] = {}
+    for i, plan in enumerate(plans):
+        t, _ = control_sequence(plan, timestep, settle, hold)
+        key = (id(plan.spec), plan.params.slope, friction[i], actuators[i], t.size)
+        groups.setdefault(key, []).append(i)
+    out: list[Recording | None] = [None] * len(plans)
+    for (_, _, mu, mode, _), members in groups.items():
+        first = plans[members[0]]
+        model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
+        controls, states, times = [], [], None
+        for i in members:
+            times, q_ref = control_sequence(plans[i], timestep, settle, hold)
+            controls.append(q_ref)
+            states.append(initial_state(model, plans[i]))
+        datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(members))))]
+        state, sensordata = rollout.rollout(model, datas, np.array(states), np.array(controls))
+        R_ws = rotation_slope_to_world(first.params.slope)
+        limit = servo_settings(first.spec, mode).force_limit
+        for row, i in enumerate(members):
+            clock = state[row, :, 0]  # time after each step
+            reset = np.flatnonzero(np.diff(clock) <= 0)
+            diverged = bool(reset.size) or not np.isfinite(sensordata[row]).all()
+            cut = int(reset[0]) + 1 if reset.size else clock.size
+            if not np.isfinite(sensordata[row]).all():
+                cut = min(cut, int(np.argmax(~np.isfinite(sensordata[row]).all(axis=1))))
+            out[i] = Recording(
+                t=times[:cut],
+                q_ref=controls[row][:cut],
+                sensors=decode(model, sensordata[row, :cut], R_ws),
+                force_limit=limit,
+                diverged_at=float(times[min(cut, times.size - 1)]) if diverged else None,
+            )
+    return out
