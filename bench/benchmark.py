@@ -72,6 +72,52 @@ def planner_figures() -> dict:
     }
 
 
+def sim_figures() -> dict:
+    """Raw mj_step rate of the trial scene vs a whole trial's rate, measured in one run.
+
+    ``trial_steps_per_s`` covers planning, the rollout, sensor decoding, event
+    detection and the comparison; ``rollout_steps_per_s`` plays a batch of trials
+    through ``mujoco.rollout`` on 2 threads.
+    """
+    import mujoco
+
+    from bench.playback import build_model, play_many
+    from bench.trial import TrialSpec, run_trial
+
+    spec = load_spec()
+    params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
+    plan = plan_walk(spec, params)
+    model = build_model(plan, friction=1.0, actuators="stiff", timestep=0.001)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    raw_steps = 5000
+    raw_s = _best_of(lambda: [mujoco.mj_step(model, data) for _ in range(raw_steps)], 3)
+    holder = {}
+
+    def trial():
+        holder["result"] = run_trial(spec, TrialSpec(params))
+
+    trial_s = _best_of(trial, 3)
+    steps = holder["result"].sim_steps
+    batch = [
+        plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME, hip_height=hz))
+        for hz in np.linspace(0.19, 0.21, 8)
+    ]
+    batch_s = _best_of(
+        lambda: play_many(batch, friction=[1.0] * 8, actuators=["stiff"] * 8, threads=2), 2
+    )
+    raw_rate, trial_rate = raw_steps / raw_s, steps / trial_s
+    return {
+        "trial_steps": steps,
+        "raw_steps_per_s": raw_rate,
+        "trial_steps_per_s": trial_rate,
+        "ratio": trial_rate / raw_rate,
+        "rollout_trials": len(batch),
+        "rollout_threads": 2,
+        "rollout_steps_per_s": len(batch) * steps / batch_s,
+    }
+
+
 def run(what: str) -> dict:
     """Figures of one benchmark by name."""
-    return {"planner": planner_figures}[what]()
+    return {"planner": planner_figures, "sim": sim_figures}[what]()

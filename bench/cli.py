@@ -7,6 +7,7 @@ stderr with a non-zero exit and no traceback; output files appear only whole.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 
 import numpy as np
@@ -71,6 +72,22 @@ def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tr
     p.add_argument("--steps", type=int, default=4, metavar="N", help="number of steps (4)")
 
 
+def _add_sim_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--friction",
+        type=_positive_float,
+        default=1.0,
+        metavar="MU",
+        help="Coulomb friction of feet on the plane, > 0 (1.0)",
+    )
+    p.add_argument(
+        "--actuators",
+        default="stiff",
+        metavar="MODE",
+        help="stiff (tracks the plan closely) or servo (AX-12A-like)",
+    )
+
+
 def gait_from_args(args, spec):
     """GaitParams from parsed flags (degrees → radians here)."""
     from planner.trajectory import GaitParams
@@ -121,6 +138,40 @@ def _cmd_plan(args) -> None:
     print(f"wrote {args.out}")
 
 
+def _cmd_mjcf(args) -> None:
+    from bench.files import atomic_path
+    from bench.model import scene_xml
+    from planner.spec import load_spec
+
+    spec = load_spec(args.robot)
+    xml = scene_xml(
+        spec, slope=np.deg2rad(args.slope), friction=args.friction, actuators=args.actuators
+    )
+    with atomic_path(args.out) as tmp:
+        tmp.write_text(xml)
+    print(
+        f"wrote {args.out}: {spec.name} on {args.slope:g} deg, mu {args.friction:g}, "
+        f"{args.actuators} actuators"
+    )
+
+
+def _cmd_trial(args) -> None:
+    from bench.files import atomic_path
+    from bench.trial import TrialSpec, run_trial
+    from planner.spec import load_spec
+
+    spec = load_spec(args.robot)
+    trial = TrialSpec(gait_from_args(args, spec), friction=args.friction, actuators=args.actuators)
+    result = run_trial(spec, trial)
+    with atomic_path(args.out) as tmp:
+        tmp.write_text(json.dumps(result.scalars(), indent=2))
+    if args.series:
+        with atomic_path(args.series) as tmp, open(tmp, "wb") as f:
+            np.savez_compressed(f, **result.series)
+    print("\n".join(result.summary_lines()))
+    print(f"wrote {args.out}" + (f" and {args.series}" if args.series else ""))
+
+
 def _cmd_benchmark(args) -> None:
     from bench import benchmark
 
@@ -137,8 +188,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="output .npz")
     p.set_defaults(run=_cmd_plan)
 
+    p = sub.add_parser("mjcf", help="write a self-contained MuJoCo scene of the robot")
+    p.add_argument(
+        "--slope",
+        type=_positive_float,
+        default=0.0,
+        metavar="DEG",
+        help="plane inclination [deg], in (-60, 60)",
+    )
+    _add_sim_flags(p)
+    p.add_argument("--robot", metavar="FILE", help="robot spec TOML (default: the paper's biped)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output scene .xml")
+    p.set_defaults(run=_cmd_mjcf)
+
+    p = sub.add_parser("trial", help="plan a walk, play it in MuJoCo, compare the ZMPs")
+    _add_gait_flags(p)
+    _add_sim_flags(p)
+    p.add_argument("--out", required=True, metavar="FILE", help="output .json (scalars, events)")
+    p.add_argument("--series", metavar="FILE", help="also write the time series (.npz)")
+    p.set_defaults(run=_cmd_trial)
+
     p = sub.add_parser("benchmark", help="print speed figures as name: value lines")
-    p.add_argument("what", choices=("planner",), help="what to measure")
+    p.add_argument("what", choices=("planner", "sim"), help="what to measure")
     p.set_defaults(run=_cmd_benchmark)
     return parser
 

@@ -100,7 +100,21 @@ def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
 
 def robot_xml(spec: RobotSpec, *, actuators: str = "stiff") -> str:
     """MJCF text of the pelvis-rooted biped (see module doc)."""
-    return build_robot(spec, actuators=actuators).to_xml()
+    return compiled_xml(build_robot(spec, actuators=actuators))
+
+
+def compiled_xml(mjs: mujoco.MjSpec) -> str:
+    """``mjs.to_xml()`` (which compiles), with MuJoCo's refusal turned into one SceneError line."""
+    try:
+        return mjs.to_xml()
+    except ValueError as err:
+        raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+
+
+def mujoco_message(err: Exception) -> str:
+    """MuJoCo's compiler error on one line ("Error: ... / Element name ...")."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    return "; ".join(lines).removeprefix("Error: ") or "unknown error"
 
 
 def build_robot(spec: RobotSpec, *, actuators: str = "stiff") -> mujoco.MjSpec:
@@ -147,7 +161,7 @@ def scene_xml(
     pelvis.pos, pelvis.quat = R @ pelvis.pos, _quat(R)
     key = mjs.key("home")
     key.qpos = np.concatenate([pelvis.pos, pelvis.quat, list(key.qpos)[7:]])
-    return mjs.to_xml()
+    return compiled_xml(mjs)
 
 
 def stance_rooted_xml(spec: RobotSpec, stance: int) -> str:

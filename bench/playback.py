@@ -26,7 +26,7 @@ import numpy as np
 from mujoco import rollout
 
 from bench.contact import TrialSensors, add_trial_sensors, decode
-from bench.model import scene_xml, servo_settings
+from bench.model import SceneError, mujoco_message, scene_xml, servo_settings
 from planner.kinematics import Chain, rotation_slope_to_world
 from planner.plan import Plan
 
@@ -65,7 +65,10 @@ def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float)
     )
     mjs = mujoco.MjSpec.from_string(xml)
     add_trial_sensors(mjs)
-    return mjs.compile()
+    try:
+        return mjs.compile()
+    except ValueError as err:
+        raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
 
 
 def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:
@@ -158,17 +161,33 @@ def play_many(
         R_ws = rotation_slope_to_world(first.params.slope)
         limit = servo_settings(first.spec, mode).force_limit
         for row, i in enumerate(members):
-            clock = state[row, :, 0]  # time after each step
-            reset = np.flatnonzero(np.diff(clock) <= 0)
-            diverged = bool(reset.size) or not np.isfinite(sensordata[row]).all()
-            cut = int(reset[0]) + 1 if reset.size else clock.size
-            if not np.isfinite(sensordata[row]).all():
-                cut = min(cut, int(np.argmax(~np.isfinite(sensordata[row]).all(axis=1))))
-            out[i] = Recording(
-                t=times[:cut],
-                q_ref=controls[row][:cut],
-                sensors=decode(model, sensordata[row, :cut], R_ws),
-                force_limit=limit,
-                diverged_at=float(times[min(cut, times.size - 1)]) if diverged else None,
+            out[i] = recording_from_rollout(
+                model, state[row], sensordata[row], times, controls[row], R_ws, limit
             )
     return out
+
+
+def recording_from_rollout(
+    model, state, sensordata, t, q_ref, rotation_slope_to_world, force_limit
+) -> Recording:
+    """A ``Recording`` from one rollout's states (m, nstate) and sensor rows (m, nsensor).
+
+    A MuJoCo reset (time running backwards) or a non-finite row cuts the series
+    there and sets ``diverged_at``.
+    """
+    clock = state[:, 0]  # time after each step
+    reset = np.flatnonzero(np.diff(clock) <= 0)
+    bad = ~np.isfinite(sensordata).all(axis=1) | ~np.isfinite(state).all(axis=1)
+    cut = clock.size
+    if reset.size:
+        cut = int(reset[0]) + 1
+    if bad.any():
+        cut = min(cut, int(np.argmax(bad)))
+    diverged = cut < clock.size
+    return Recording(
+        t=t[:cut],
+        q_ref=q_ref[:cut],
+        sensors=decode(model, sensordata[:cut], rotation_slope_to_world),
+        force_limit=force_limit,
+        diverged_at=float(t[min(cut, t.size - 1)]) if diverged else None,
+    )

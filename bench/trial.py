@@ -1,0 +1,198 @@
+"""One trial: plan a walk, play it in MuJoCo, compare prediction and physics.
+
+``run_trial(spec, trial)`` returns a ``TrialResult``: both ZMP series on the
+walk's time base, their RMS and max distance over the samples where the robot
+stands (before any tip or fall, both values finite), the margin of each to the
+planned support polygon, both verdicts, the events, the required friction ratio
+against μ, and planned vs simulated joint angles.
+
+Analytic verdict: ``stable`` when the ZMP stays inside the support polygon at
+every sample, else ``zmp_outside``; ``slip_predicted`` when the required friction
+|F_t|/F_n of the planned ground force exceeds μ somewhere.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from bench.events import Event, detect, verdict
+from bench.model import ACTUATOR_MODES, SceneError
+from bench.playback import Recording, play
+from planner.joints import stance_swing_to_left_right
+from planner.plan import Plan, plan_walk
+from planner.spec import RobotSpec
+from planner.trajectory import GaitParams
+from planner.zmp import signed_margin
+
+G = 9.81
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """What to simulate: a gait (``GaitParams``) on a plane of friction μ with an actuator mode.
+
+    Attributes:
+        gait: Step time, slope [rad], Hz, lift, tilt, steps.
+        friction: Coulomb μ of the feet on the plane, > 0.
+        actuators: "stiff" or "servo".
+        timestep: Simulation step [s].
+    """
+
+    gait: GaitParams
+    friction: float = 1.0
+    actuators: str = "stiff"
+    timestep: float = 0.001
+
+    def __post_init__(self) -> None:
+        if not self.friction > 0:
+            raise SceneError(f"friction {self.friction!r}: must be > 0")
+        if self.actuators not in ACTUATOR_MODES:
+            raise SceneError(
+                f"actuators {self.actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}"
+            )
+        if not 0 < self.timestep <= 0.005:
+            raise SceneError(f"timestep {self.timestep!r} s: must lie in (0, 0.005]")
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """Analytic vs simulated balance of one trial (series on the walk's time base)."""
+
+    trial: TrialSpec
+    analytic_verdict: str
+    simulated_verdict: str
+    slip_predicted: bool
+    events: list[Event]
+    zmp_rms: float  # [m]
+    zmp_max: float  # [m]
+    standing_fraction: float  # share of walk samples compared
+    analytic_min_margin: float  # [m]
+    simulated_min_margin: float  # [m], simulated CoP to the planned support polygon
+    max_friction_ratio: float  # analytic |F_t|/F_n
+    simulated_max_friction_ratio: float  # measured, while standing
+    tracking_rms: float  # [rad], all joints, while standing
+    peak_torque_planned: float  # [N m]
+    peak_torque_simulated: float  # [N m]
+    wall_s: float
+    sim_steps: int
+    series: dict = field(repr=False, compare=False)
+
+    def scalars(self) -> dict:
+        """Everything but the series, JSON-ready (angles in degrees at this edge)."""
+        gait = asdict(self.trial.gait)
+        gait["slope_deg"] = float(np.rad2deg(gait.pop("slope")))
+        gait["tilt_deg"] = float(np.rad2deg(gait.pop("tilt")))
+        out = {k: v for k, v in asdict(self).items() if k not in ("trial", "series", "events")}
+        out["trial"] = {
+            "gait": gait,
+            **{k: v for k, v in asdict(self.trial).items() if k != "gait"},
+        }
+        out["events"] = [asdict(e) for e in self.events]
+        return json.loads(json.dumps(out, default=float))
+
+    def summary_lines(self) -> list[str]:
+        g = self.trial.gait
+        lines = [
+            f"trial: {g.steps} steps of {g.step_time:g} s on {np.rad2deg(g.slope):g} deg, "
+            f"mu {self.trial.friction:g}, {self.trial.actuators} actuators",
+            f"analytic:  {self.analytic_verdict:<12} min ZMP margin "
+            f"{self.analytic_min_margin * 1e3:7.2f} mm, max friction ratio "
+            f"{self.max_friction_ratio:.3f} ({'>' if self.slip_predicted else '<='} mu)",
+            f"simulated: {self.simulated_verdict:<12} min CoP margin "
+            f"{self.simulated_min_margin * 1e3:7.2f} mm, max friction ratio "
+            f"{self.simulated_max_friction_ratio:.3f}",
+            f"ZMP analytic vs simulated: RMS {self.zmp_rms * 1e3:.2f} mm, max "
+            f"{self.zmp_max * 1e3:.2f} mm over {self.standing_fraction:.0%} of the walk",
+            f"joint tracking RMS {np.rad2deg(self.tracking_rms):.2f} deg; peak torque planned "
+            f"{self.peak_torque_planned:.3f} / simulated {self.peak_torque_simulated:.3f} N m",
+        ]
+        lines += [f"event {e.time:7.3f} s  {e.kind:<12} {e.cause}" for e in self.events[:8]]
+        if len(self.events) > 8:
+            lines.append(f"... and {len(self.events) - 8} more events")
+        return lines
+
+
+def run_trial(
+    spec: RobotSpec,
+    trial: TrialSpec,
+    *,
+    plan: Plan | None = None,
+    recording: Recording | None = None,
+) -> TrialResult:
+    """Plan (unless given), simulate (unless given) and compare one trial."""
+    start = time.perf_counter()
+    plan = plan or plan_walk(spec, trial.gait)
+    recording = recording or play(
+        plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
+    )
+    return compare(plan, trial, recording, wall_s=time.perf_counter() - start)
+
+
+def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float) -> TrialResult:
+    """Put prediction and simulation side by side (see module doc)."""
+    weight = plan.spec.total_mass * G
+    events = detect(recording, weight=weight, hip_height=plan.params.hip_height)
+    s, t = recording.sensors, recording.t
+    walk = (t >= plan.t[0]) & (t <= plan.t[-1])
+    tw = t[walk]
+
+    def on_walk(x):
+        x = x.reshape(x.shape[0], -1)
+        return np.column_stack([np.interp(tw, plan.t, x[:, j]) for j in range(x.shape[1])])
+
+    zmp = on_walk(plan.zmp)
+    cop = s.cop[walk]
+    lost = [e.time for e in events if e.kind in ("tip", "fall", "diverged")]
+    standing = (tw < min(lost, default=np.inf)) & np.isfinite(cop).all(axis=1)
+    distance = np.hypot(*(cop - zmp).T)[standing]
+    idx = np.clip(np.searchsorted(plan.t, tw), 0, plan.t.size - 1)
+    polygon = plan.polygon[idx]
+    sim_margin = signed_margin(np.nan_to_num(cop), polygon)[standing]
+    q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
+    tracking = (s.q[walk] - q_plan)[standing]
+    force = s.foot_force[walk].sum(axis=1)[standing]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.hypot(force[:, 0], force[:, 1]) / force[:, 2]
+    planned_ratio = float(plan.friction_ratio.max())
+
+    def worst(x, f=np.max):
+        return float(f(x)) if np.size(x) else float("nan")
+
+    return TrialResult(
+        trial=trial,
+        analytic_verdict="stable" if plan.stable else "zmp_outside",
+        simulated_verdict=verdict(events),
+        slip_predicted=planned_ratio > trial.friction,
+        events=events,
+        zmp_rms=worst(np.sqrt(np.mean(distance**2))) if distance.size else float("nan"),
+        zmp_max=worst(distance),
+        standing_fraction=float(standing.mean()) if standing.size else 0.0,
+        analytic_min_margin=float(plan.margin.min()),
+        simulated_min_margin=worst(sim_margin, np.min),
+        max_friction_ratio=planned_ratio,
+        simulated_max_friction_ratio=worst(ratio[np.isfinite(ratio)]),
+        tracking_rms=worst(np.sqrt(np.mean(tracking**2))) if tracking.size else float("nan"),
+        peak_torque_planned=float(np.abs(plan.tau).max()),
+        peak_torque_simulated=float(np.abs(s.actuator_force[walk]).max()),
+        wall_s=wall_s,
+        sim_steps=int(t.size),
+        series={
+            "t": tw,
+            "zmp_analytic": zmp,
+            "zmp_lipm": on_walk(plan.zmp_lipm),
+            "cop": cop,
+            "foot_cop": s.foot_cop[walk],
+            "foot_force": s.foot_force[walk],
+            "q_planned": q_plan,
+            "q_simulated": s.q[walk],
+            "standing": standing,
+            "margin_analytic": on_walk(plan.margin)[:, 0],
+            "actuator_force": s.actuator_force[walk],
+            "sole": s.sole[walk],
+            "pelvis_height": s.pelvis_height[walk],
+        },
+    )

@@ -1,0 +1,124 @@
+"""Trials end to end: the 2 s walk agrees with the plan, a blow-up is reported, CLI refusals."""
+
+import json
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+from mujoco import rollout
+
+from bench.events import detect, verdict
+from bench.playback import build_model, control_sequence, initial_state, recording_from_rollout
+from bench.trial import TrialSpec, run_trial
+from planner.kinematics import rotation_slope_to_world
+from planner.plan import plan_walk
+from planner.spec import default_spec_path
+from planner.trajectory import GaitParams
+
+
+def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
+    """2 s steps, stiff actuators: no events, simulated CoP within mm of the analytic ZMP."""
+    result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 2.0)))
+    print("\n".join(result.summary_lines()))
+    assert result.analytic_verdict == "stable"
+    assert result.simulated_verdict == "stable"
+    assert [e.kind for e in result.events] == []
+    assert result.standing_fraction == 1.0
+    assert result.zmp_rms < 0.008
+
+
+def test_fast_walk_falls_where_the_plan_leaves_the_foot(spec):
+    result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 0.4)))
+    assert result.analytic_verdict == "zmp_outside"
+    assert result.simulated_verdict in ("tip", "fall")
+
+
+def test_a_blow_up_is_reported_not_raised(spec, tmp_path, monkeypatch):
+    """Explicit Euler with absurd gains diverges; the recording is cut and says so."""
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes MUJOCO_LOG.TXT into the working directory
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
+    model = build_model(plan, friction=1.0, actuators="stiff", timestep=0.004)
+    model.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    model.actuator_gainprm[:, 0] *= 1e6
+    model.actuator_biasprm[:, 1] *= 1e6
+    model.actuator_forcelimited[:] = 0
+    t, q_ref = control_sequence(plan, model.opt.timestep, 0.1, 0.0)
+    state, sensordata = rollout.rollout(
+        model, mujoco.MjData(model), initial_state(model, plan), q_ref[None]
+    )
+    rec = recording_from_rollout(
+        model, state[0], sensordata[0], t, q_ref, rotation_slope_to_world(0.0), 50.0
+    )
+    assert rec.diverged_at is not None
+    assert rec.t.size < t.size
+    events = detect(rec, weight=spec.total_mass * 9.81, hip_height=plan.params.hip_height)
+    assert verdict(events) == "diverged"
+
+
+def _cli(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "bench.cli", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_trial_cli_writes_json_and_series(tmp_path):
+    out, series = tmp_path / "trial.json", tmp_path / "trial.npz"
+    result = _cli(
+        "trial",
+        "--step-time",
+        "1",
+        "--slope",
+        "10",
+        "--friction",
+        "0.6",
+        "--steps",
+        "2",
+        "--out",
+        str(out),
+        "--series",
+        str(series),
+    )
+    assert result.returncode == 0, result.stderr
+    data = json.loads(out.read_text())
+    assert data["trial"]["gait"]["slope_deg"] == pytest.approx(10)
+    assert data["simulated_verdict"] in ("stable", "slip", "tip", "fall", "diverged")
+    assert np.load(series)["cop"].shape[1] == 2
+
+
+@pytest.mark.parametrize(
+    "command, flags, message",
+    [
+        ("trial", ["--step-time", "1", "--friction", "0"], "friction 0.0: must be > 0"),
+        ("trial", ["--step-time", "1", "--friction", "-2"], "friction -2.0: must be > 0"),
+        ("trial", ["--step-time", "0"], "step time 0.0 s: must be > 0"),
+        ("trial", ["--step-time", "1", "--slope", "61"], "slope 61 deg"),
+        ("trial", ["--step-time", "1", "--actuators", "soft"], "actuators 'soft'"),
+        ("mjcf", ["--slope", "-60"], "slope -60 deg"),
+        ("mjcf", ["--actuators", "hydraulic"], "actuators 'hydraulic'"),
+    ],
+)
+def test_bad_input_is_one_line(tmp_path, command, flags, message):
+    out = tmp_path / "out"
+    result = _cli(command, *flags, "--out", str(out))
+    assert result.returncode == 2
+    assert message in result.stderr, result.stderr
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_spec_mujoco_refuses_is_one_line(tmp_path, spec):
+    """A spec the planner accepts but MuJoCo cannot compile is refused in one line."""
+    text = default_spec_path().read_text()
+    bad = tmp_path / "bad.toml"
+    # positive (the planner accepts it) but below MuJoCo's minimum for a moving body
+    bad.write_text(
+        text.replace("mass = 0.008", "mass = 1e-20").replace(
+            "inertia = [8.330e-7, 8.330e-7, 8.330e-7]", "inertia = [1e-22, 1e-22, 1e-22]"
+        )
+    )
+    result = _cli("mjcf", "--robot", str(bad), "--out", str(tmp_path / "scene.xml"))
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert not (tmp_path / "scene.xml").exists()
