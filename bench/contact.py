@@ -93,6 +93,12 @@ def add_trial_sensors(mjs: mujoco.MjSpec, floor: str = "floor") -> None:
     mjs.add_sensor(
         name="pelvis_pos", type=_SENSOR.mjSENS_FRAMEPOS, objtype=_OBJ.mjOBJ_XBODY, objname="pelvis"
     )
+    mjs.add_sensor(
+        name="pelvis_quat",
+        type=_SENSOR.mjSENS_FRAMEQUAT,
+        objtype=_OBJ.mjOBJ_XBODY,
+        objname="pelvis",
+    )
     for joint in MJCF_JOINTS:
         mjs.add_sensor(
             name=f"{joint}_pos",
@@ -121,6 +127,8 @@ class TrialSensors:
         sole: Sole sites [m], (m, 2, 3).
         foot_normal: Each foot's z axis, (m, 2, 3); (0, 0, 1) when flat on the plane.
         pelvis_height: Pelvis origin above the plane [m], (m,).
+        pelvis_qpos: Pelvis free-joint pose in the world (position, quaternion wxyz), (m, 7);
+            with ``q`` it is the full ``qpos`` for replaying the motion (recordings).
         touching: A non-foot body touches the plane, (m,).
     """
 
@@ -132,6 +140,7 @@ class TrialSensors:
     sole: np.ndarray
     foot_normal: np.ndarray
     pelvis_height: np.ndarray
+    pelvis_qpos: np.ndarray
     touching: np.ndarray
 
 
@@ -165,5 +174,6 @@ def decode(model: mujoco.MjModel, sensordata: np.ndarray, rotation_slope_to_worl
         sole=np.stack([block(f"{p}sole_pos") for p in SIDE_PREFIX], axis=1) @ R,
         foot_normal=np.stack([block(f"{p}foot_zaxis") for p in SIDE_PREFIX], axis=1) @ R,
         pelvis_height=block("pelvis_pos") @ R[:, 2],
+        pelvis_qpos=np.column_stack([block("pelvis_pos"), block("pelvis_quat")]),
         touching=np.column_stack([block(f"{b}_touch") for b in NON_FOOT_BODIES]).any(axis=1),
     )

@@ -1,5 +1,13 @@
 """One trial: plan a walk, play it in MuJoCo, compare prediction and physics.
 
+``TrialResult.series`` (all on the walk's time base ``t``, vectors in S unless
+said): ``zmp_analytic``, ``zmp_lipm``, ``cop`` (simulated, NaN when no foot is
+loaded), ``foot_cop`` (n, 2, 2) and ``foot_force`` (n, 2, 3) per foot (left,
+right), ``q_planned`` / ``q_simulated`` (MJCF joint order), ``standing``,
+``margin_analytic``, ``actuator_force``, ``sole`` (n, 2, 3), ``pelvis_height``,
+and ``qpos`` (n, 15): the simulated MuJoCo ``qpos`` (world frame) for replaying
+the motion, e.g. with ``mj_kinematics``.
+
 ``run_trial(spec, trial)`` returns a ``TrialResult``: both ZMP series on the
 walk's time base, their RMS and max distance over the samples where the robot
 stands (before any tip or fall, both values finite), the margin of each to the
