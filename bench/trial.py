@@ -77,6 +77,8 @@ class TrialResult:
     events: list[Event]
     zmp_rms: float  # [m]
     zmp_max: float  # [m]
+    lipm_rms: float  # [m], analytic multibody ZMP vs LIPM ZMP over the walk
+    cop_lipm_rms: float  # [m], simulated CoP vs LIPM ZMP while standing
     standing_fraction: float  # share of walk samples compared
     analytic_min_margin: float  # [m]
     simulated_min_margin: float  # [m], simulated CoP to the planned support polygon
@@ -153,6 +155,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         return np.column_stack([np.interp(tw, plan.t, x[:, j]) for j in range(x.shape[1])])
 
     zmp = on_walk(plan.zmp)
+    lipm = on_walk(plan.zmp_lipm)
     cop = s.cop[walk]
     lost = [e.time for e in events if e.kind in ("tip", "fall", "diverged")]
     standing = (tw < min(lost, default=np.inf)) & np.isfinite(cop).all(axis=1)
@@ -178,6 +181,8 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         events=events,
         zmp_rms=worst(np.sqrt(np.mean(distance**2))) if distance.size else float("nan"),
         zmp_max=worst(distance),
+        lipm_rms=float(np.sqrt(np.mean(np.sum((plan.zmp - plan.zmp_lipm) ** 2, axis=1)))),
+        cop_lipm_rms=_rms(np.hypot(*(cop - lipm).T)[standing]),
         standing_fraction=float(standing.mean()) if standing.size else 0.0,
         analytic_min_margin=float(plan.margin.min()),
         simulated_min_margin=worst(sim_margin, np.min),
@@ -191,7 +196,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         series={
             "t": tw,
             "zmp_analytic": zmp,
-            "zmp_lipm": on_walk(plan.zmp_lipm),
+            "zmp_lipm": lipm,
             "cop": cop,
             "foot_cop": s.foot_cop[walk],
             "foot_force": s.foot_force[walk],
@@ -204,3 +209,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
             "pelvis_height": s.pelvis_height[walk],
         },
     )
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
