@@ -142,11 +142,28 @@ class RobotSpec:
         return _replace(self, foot_length=foot_length, ankle_to_toe=toe)
 
     def with_mass_scale(self, scale: dict[str, float]) -> RobotSpec:
-        """A copy with link masses and inertias multiplied per link name (or "all")."""
+        """A copy with link masses and inertias multiplied by group factors.
+
+        Args:
+            scale: Factors by group: a link name (pelvis, thigh, shank, ankle, foot),
+                "legs" (every link but the pelvis, both legs) or "all"; the most
+                specific group wins. E.g. {"all": 10} or {"legs": 2}.
+        """
+        unknown = set(scale) - {"all", "legs", *LINK_NAMES}
+        if unknown:
+            raise SpecError(
+                f"mass scale group {sorted(unknown)[0]!r}: must be one of all, legs, "
+                + ", ".join(LINK_NAMES)
+            )
         links = {}
         for name, link in self.links.items():
-            factor = scale.get(name, scale.get("all", 1.0))
-            if not factor > 0:
+            group = (
+                scale.get("all", 1.0)
+                if name == "pelvis"
+                else scale.get("legs", scale.get("all", 1.0))
+            )
+            factor = scale.get(name, group)
+            if not (isinstance(factor, int | float) and factor > 0):
                 raise SpecError(f"mass scale {name} = {factor!r}: must be > 0")
             links[name] = LinkInertial(
                 name, link.mass * factor, link.com, tuple(i * factor for i in link.inertia)

@@ -42,3 +42,14 @@ def test_malformed_spec_is_refused(edit, message):
 def test_missing_file(tmp_path):
     with pytest.raises(SpecError, match="no such file"):
         load_spec(tmp_path / "nope.toml")
+
+
+def test_mass_scale_groups(spec):
+    legs = spec.with_mass_scale({"legs": 2})
+    assert legs.links["pelvis"].mass == spec.links["pelvis"].mass
+    assert legs.links["foot"].mass == 2 * spec.links["foot"].mass
+    mixed = spec.with_mass_scale({"all": 10, "foot": 1})
+    assert mixed.links["pelvis"].mass == 10 * spec.links["pelvis"].mass
+    assert mixed.links["foot"].mass == spec.links["foot"].mass
+    with pytest.raises(SpecError, match="mass scale group 'arms'"):
+        spec.with_mass_scale({"arms": 2})
