@@ -207,6 +207,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
             "actuator_force": s.actuator_force[walk],
             "sole": s.sole[walk],
             "pelvis_height": s.pelvis_height[walk],
+            "qpos": np.column_stack([s.pelvis_qpos, s.q])[walk],
         },
     )
 
