@@ -4,6 +4,13 @@
 GA-population evaluations per second at 100 samples per step (``evals_per_s``)
 and the speed-up of the vectorised batch over calling the single-walk planner in
 a Python loop on the same individuals (``speedup_vs_loop``).
+
+``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s``,
+``evals_per_s``).
+
+``sweep``: the default sweep end to end on all cores (``trials``, ``wall_s``,
+``trials_per_s``) and its simulated steps per second as a share of the raw
+``mj_step`` capacity measured in the same run (``fraction_of_raw``).
 """
 
 from __future__ import annotations
@@ -72,6 +79,30 @@ def planner_figures() -> dict:
     }
 
 
+def raw_step_rate(steps: int = 5000, repeats: int = 3, *, clock=time.perf_counter) -> float:
+    """Raw ``mj_step`` rate [steps/s] of the nominal trial scene (flat, μ = 1, stiff).
+
+    The robot stands in its home keyframe; best of ``repeats`` runs of ``steps``,
+    timed by ``clock`` (wall time, or ``time.process_time`` for CPU time).
+    """
+    import mujoco
+
+    from bench.playback import build_model
+
+    spec = load_spec()
+    plan = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
+    model = build_model(plan, friction=1.0, actuators="stiff", timestep=0.001)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    best = np.inf
+    for _ in range(repeats):
+        start = clock()
+        for _ in range(steps):
+            mujoco.mj_step(model, data)
+        best = min(best, clock() - start)
+    return steps / best
+
+
 def sim_figures() -> dict:
     """Raw mj_step rate of the trial scene vs a whole trial's rate, measured in one run.
 
@@ -79,19 +110,12 @@ def sim_figures() -> dict:
     detection and the comparison; ``rollout_steps_per_s`` plays a batch of trials
     through ``mujoco.rollout`` on 2 threads.
     """
-    import mujoco
-
-    from bench.playback import build_model, play_many
+    from bench.playback import play_many
     from bench.trial import TrialSpec, run_trial
 
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
-    plan = plan_walk(spec, params)
-    model = build_model(plan, friction=1.0, actuators="stiff", timestep=0.001)
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, 0)
-    raw_steps = 5000
-    raw_s = _best_of(lambda: [mujoco.mj_step(model, data) for _ in range(raw_steps)], 3)
+    raw_rate = raw_step_rate()
     holder = {}
 
     def trial():
@@ -106,7 +130,7 @@ def sim_figures() -> dict:
     batch_s = _best_of(
         lambda: play_many(batch, friction=[1.0] * 8, actuators=["stiff"] * 8, threads=2), 2
     )
-    raw_rate, trial_rate = raw_steps / raw_s, steps / trial_s
+    trial_rate = steps / trial_s
     return {
         "trial_steps": steps,
         "raw_steps_per_s": raw_rate,
@@ -118,6 +142,98 @@ def sim_figures() -> dict:
     }
 
 
+GA_SLOPE_DEG = 22.5  # the paper's re-optimised case
+
+
+def ga_figures() -> dict:
+    """The paper's full GA (130 x 500 = 65,000 evaluations) at 22.5 deg, timed once.
+
+    ``wall_s`` covers the whole search (pymoo's operators included); ``feasible``
+    and ``work_J`` say what it found, so a fast but broken run shows.
+    """
+    from bench.optimize import GaSettings, run_ga
+    from planner.optimize import GaitProblem, ga_params
+
+    spec = load_spec()
+    problem = GaitProblem(spec, ga_params(spec, NOMINAL_STEP_TIME, np.deg2rad(GA_SLOPE_DEG)))
+    result = run_ga(problem, GaSettings())
+    return {
+        "slope_deg": GA_SLOPE_DEG,
+        "evaluations": result.evaluations,
+        "wall_s": result.wall_s,
+        "evals_per_s": result.evals_per_s,
+        "feasible": result.best.feasible,
+        "work_J": result.best.work,
+    }
+
+
+def sweep_figures() -> dict:
+    """The default sweep (``bench/sweeps/paper.toml``) end to end on all cores, into a temp dir.
+
+    ``wall_s`` runs from starting the worker pool to the sorted table. The raw
+    rate is measured in the same run, before and after the sweep, in a pool of
+    the same size: every worker steps the nominal scene at once for about a
+    second (``raw_step_rate``) and their rates add up to ``raw_steps_per_s``,
+    the machine's raw stepping capacity under its load at the time.
+    ``fraction_of_raw`` is the sweep's simulated steps per second over that
+    capacity, i.e. the share left after planning, model building, sensor
+    decoding, comparison, the table and idle workers at the end of the sweep.
+    On a machine shared with other jobs the wall-time figures move with their
+    load; ``cpu_fraction_of_raw`` (steps per CPU second of the sweep, workers
+    and parent, over the raw steps per CPU second) moves less.
+    """
+    import os
+    import resource
+    import tempfile
+
+    from bench.sweep import open_executor, run_sweep
+    from bench.sweep_config import load_sweep
+
+    config = load_sweep()
+    workers = os.cpu_count() or 1
+
+    def capacity() -> float:  # all workers stepping at once, ~1 s each, mean (not best) rate
+        with open_executor(workers=workers) as pool:
+            rates = [pool.submit(raw_step_rate, 40_000, 1) for _ in range(workers)]
+            return sum(f.result() for f in rates)
+
+    def cpu_s() -> float:  # this process and its finished children, user + system [s]
+        own, children = (
+            resource.getrusage(resource.RUSAGE_SELF),
+            resource.getrusage(resource.RUSAGE_CHILDREN),
+        )
+        return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+    before = capacity()
+    with tempfile.TemporaryDirectory() as out:
+        start, start_cpu = time.perf_counter(), cpu_s()
+        with open_executor(workers=workers) as pool:
+            summary = run_sweep(config, out, executor=pool, quiet=True)
+        wall, cpu = time.perf_counter() - start, cpu_s() - start_cpu
+    raw = (before + capacity()) / 2  # before and after the sweep: drifting load averages out
+    raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)
+    rate = summary.sim_steps / wall
+    return {
+        "trials": summary.total,
+        "errors": summary.errors,
+        "workers": workers,
+        "wall_s": wall,
+        "trials_per_s": summary.total / wall,
+        "sim_steps": summary.sim_steps,
+        "sim_steps_per_s": rate,
+        "raw_steps_per_s": raw,
+        "fraction_of_raw": rate / raw,
+        "cpu_s": cpu,
+        "raw_steps_per_cpu_s": raw_cpu,
+        "cpu_fraction_of_raw": summary.sim_steps / cpu / raw_cpu,
+    }
+
+
 def run(what: str) -> dict:
     """Figures of one benchmark by name."""
-    return {"planner": planner_figures, "sim": sim_figures}[what]()
+    return {
+        "planner": planner_figures,
+        "sim": sim_figures,
+        "ga": ga_figures,
+        "sweep": sweep_figures,
+    }[what]()
