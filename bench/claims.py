@@ -273,11 +273,12 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
             f"{'feasible' if report['feasible'] else 'INFEASIBLE'}: Hz {b['hip_height_m']:.3f}"
             f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {b['tilt_deg']:.2f}°, work "
             f"{b['work_J']:.3f} J, min margin {b['min_margin_m'] * 1e3:.1f} mm"
+            + _fine_check(report)
         )
 
     out = []
     nominal = [(p, r) for p, r in reports if abs(r["foot_length_m"] - spec.foot_length) < 1e-9]
-    at = {r["slope_deg"]: (p, r) for p, r in nominal}
+    at = {round(r["slope_deg"], 3): (p, r) for p, r in nominal}  # degrees pass through radians
     if 22.5 in at:
         path, r = at[22.5]
         out.append(
@@ -295,7 +296,7 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
         longer = sorted(
             (r2["foot_length_m"], p2, r2)
             for p2, r2 in reports
-            if r2["slope_deg"] == 30.0 and r2["foot_length_m"] > spec.foot_length
+            if round(r2["slope_deg"], 3) == 30.0 and r2["foot_length_m"] > spec.foot_length
         )
         first = next(((length, p2, r2) for length, p2, r2 in longer if r2["feasible"]), None)
         found = (
@@ -317,6 +318,19 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
             )
         )
     return out
+
+
+def _fine_check(report: dict) -> str:
+    """The GA's best re-planned at 1 ms (``slopewalk optimize`` stores it as ``check``)."""
+    check = report.get("check")
+    if not check:
+        return ""
+    text = (
+        f" (re-planned at {check['dt_s'] * 1e3:g} ms: margin {check['min_margin_m'] * 1e3:.2f} mm"
+    )
+    if not check.get("within_joint_limits", True):
+        text += ", outside the joint limits"
+    return text + ")"
 
 
 def confusion(rows) -> str:
