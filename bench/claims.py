@@ -233,7 +233,9 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
     for path in sorted(Path(optimize_dir).glob("**/*.json")):
         data = json.loads(path.read_text())
         if isinstance(data, dict) and "best" in data and "slope_deg" in data:
-            reports.append((path, data))
+            if data.get("settings", {}).get("constraint", "penalty") == "penalty":  # the paper's
+                reports.append((path, data))
+    reports.sort(key=lambda item: item[1].get("evaluations", 0))  # largest budget wins below
     if not reports:
         return [
             _claim(
