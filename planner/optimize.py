@@ -1,0 +1,343 @@
+"""The gait optimisation problem of sec. VI: variables, bounds, objective, constraint.
+
+The GA tunes x = (Hz [m], Szmax [m], θ1max [rad]) - pelvis height, swing lift and
+peak frontal tilt - to minimise the joint work w (``plan.evaluate``) under the ZMP
+condition min margin ≥ 0. The paper's objective (eq. 6) is O = w + p with
+p = 10⁴ when the ZMP leaves the support polygon.
+
+Why two modules: ``planner`` imports numpy/scipy only (DESIGN.md), so the problem
+*definition* lives here - the variables, their bounds derived from the spec's
+kinematics, the objective and constraint arrays and the paper's penalty - while
+the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/optimize.py``.
+Any other optimiser can solve a ``GaitProblem`` through ``measure`` and
+``objectives`` without pymoo.
+
+Kinematic admissibility: ``evaluate`` marks unreachable targets (work = inf,
+margin = −inf); in addition an individual that would drive a hip pitch, knee or
+ankle pitch joint past its limit at any sample is inadmissible (``joint_gap``, from
+the planner's own IK; the ankle rolls are kept within their limits by the tilt
+bounds). Both count as infeasible for every constraint treatment.
+
+The bounds below come from the same geometry as ``plan._solve`` (hip and
+swing-ankle targets in each leg's tilted plane, see ``ik.tilted_plane_height``):
+for a hip-to-ankle vector (u, w) in the leg plane, w is affine in the pelvis
+height h = Hz − Lan with slope 1/cos λ and in the lift with slope −ℓ(t)/cos λ
+(ℓ the unit lift shape), so every bound is a closed form per sample, then a
+min/max over the samples of one walk and over a grid of tilts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.errors import SlopewalkError
+from planner.ik import tilted_plane_height, two_link_ik
+from planner.joints import JOINT_KINDS, RIGHT
+from planner.plan import evaluate
+from planner.spec import RobotSpec
+from planner.trajectory import Curve, GaitParams, Timeline
+
+VARIABLES = ("hip_height", "swing_lift", "tilt")
+CONSTRAINTS = ("penalty", "margin")
+PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
+MIN_CLEARANCE = 0.005  # [m] smallest swing lift searched: the sole clears the plane by 5 mm
+SAMPLES_PER_STEP = 100  # plan resolution inside the GA: dt = step_time / 100
+INADMISSIBLE_GAP = 1.0  # constraint value [m or rad] given to an unreachable individual
+_TILT_GRID = 61  # tilts tried when a bound is the best over all tilts
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Box of the search: lower and upper value of (Hz [m], Szmax [m], tilt [rad])."""
+
+    lower: tuple[float, float, float]
+    upper: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in zip(VARIABLES, self.lower, self.upper, strict=True):
+            if not lo < hi:
+                raise SlopewalkError(
+                    f"{name} bounds [{lo:.4g}, {hi:.4g}]: empty; the robot's kinematics "
+                    "leave no room for this variable"
+                )
+
+    @property
+    def xl(self) -> np.ndarray:
+        return np.asarray(self.lower, dtype=float)
+
+    @property
+    def xu(self) -> np.ndarray:
+        return np.asarray(self.upper, dtype=float)
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What the planner says of a population, each shape (P,).
+
+    Attributes:
+        work: Joint work Σ∫|τθ̇|dt [J]; inf where unreachable.
+        margin: Minimum signed ZMP margin [m], positive inside; −inf where unreachable.
+        joint_gap: Worst excursion of a pitch joint past its limit [rad] (``joint_gap``);
+            ≤ 0 when admissible, inf where unreachable.
+    """
+
+    work: np.ndarray
+    margin: np.ndarray
+    joint_gap: np.ndarray
+
+    @property
+    def admissible(self) -> np.ndarray:
+        return np.isfinite(self.work) & np.isfinite(self.margin) & (self.joint_gap <= 0)
+
+    @property
+    def feasible(self) -> np.ndarray:
+        """Admissible and the ZMP inside the support polygon at every sample."""
+        return self.admissible & (self.margin >= 0)
+
+
+def knee_distance_range(spec: RobotSpec) -> tuple[float, float]:
+    """Hip-to-ankle distances [m] the knee's joint limits allow.
+
+    With knee flexion κ (0 = straight) the law of cosines gives
+    d² = L1² + L2² + 2 L1 L2 cos κ; the upper knee limit sets the shortest d, the
+    lower one (or the straight leg, κ = 0, if the limit allows hyperextension)
+    the longest.
+    """
+    lo, hi = spec.joint_limits["knee"]
+    L1, L2 = spec.shank, spec.thigh
+
+    def d(kappa):
+        return float(np.sqrt(L1**2 + L2**2 + 2 * L1 * L2 * np.cos(kappa)))
+
+    return d(min(hi, np.pi)), d(max(lo, 0.0))
+
+
+def tilt_bounds(spec: RobotSpec) -> tuple[float, float]:
+    """Range of the peak tilt [rad] the ankle-roll limits allow.
+
+    Both ankle rolls equal −λ and the lean λ swings between +tilt and −tilt (it
+    leans towards each stance foot in turn), so |tilt| ≤ min(upper, −lower) of the
+    ankle_roll limit. Negative tilts (leaning away from the stance foot) are kept:
+    the paper's optimum at 22.5° is θ1max = −9.18°.
+    """
+    lo, hi = spec.joint_limits["ankle_roll"]
+    reach = min(hi, -lo)
+    if not reach > 0:
+        raise SlopewalkError(f"joint_limits.ankle_roll = [{lo}, {hi}]: must contain 0")
+    return -reach, reach
+
+
+def leg_vectors(spec: RobotSpec, timeline: Timeline, hip_height, lift, tilt):
+    """Hip-to-ankle vectors of both legs in their tilted planes, as ``plan._solve`` builds them.
+
+    Args:
+        hip_height, lift, tilt: Hz [m], Szmax [m], tilt [rad]; broadcastable, shape (P,).
+
+    Returns:
+        (u, w, cos_lean, lift_shape): u forward and w up in the leg plane [m], each
+        shape (P, n, 2) with [..., 0] the stance leg and [..., 1] the swing leg;
+        cos λ, shape (P, n, 1); the unit lift shape ℓ(t), shape (1, n, 2) (0 for
+        the stance leg).
+    """
+    hz, lift, tilt = np.broadcast_arrays(
+        *(np.atleast_1d(np.asarray(a, float)) for a in (hip_height, lift, tilt))
+    )
+    n = timeline.t.size
+    zeros = np.zeros((hz.size, n))
+    lean = timeline.tilt_shape.scaled(tilt[:, None])
+    towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)
+    pelvis = Curve(hz[:, None] - spec.ankle_height + zeros, zeros, zeros)
+    hip_w = tilted_plane_height(pelvis, towards_swing * spec.hip_width / 2, lean).p
+    z_swing = tilted_plane_height(
+        timeline.lift_shape.scaled(lift[:, None]), towards_swing * spec.hip_width, lean
+    ).p
+    hip_u = timeline.hip_x.p + zeros
+    u = np.stack([hip_u, hip_u - timeline.swing_x.p], axis=-1)
+    w = np.stack([hip_w, hip_w - z_swing], axis=-1)
+    shape = np.stack([np.zeros(n), timeline.lift_shape.p], axis=-1)[None]
+    return u, w, np.cos(lean.p)[..., None], shape
+
+
+def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
+    """Worst excursion of a hip pitch, knee or ankle pitch past its joint limit [rad], shape (P,).
+
+    The legs' joint angles come from ``ik.two_link_ik`` on the targets of
+    ``leg_vectors`` (hip pitch = β_thigh, knee = β_shank − β_thigh, ankle pitch =
+    −β_shank, both legs, every sample). Positive where some joint leaves its
+    limits somewhere in the walk, ≤ 0 (minus the smallest distance to a limit)
+    when every sample is admissible; inf where a target is out of reach.
+    """
+    X = np.atleast_2d(np.asarray(population, dtype=float))
+    u, w, _, _ = leg_vectors(spec, timeline, X[:, 0], X[:, 1], X[:, 2])
+    zero = np.zeros(u.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        shank, thigh = two_link_ik(
+            (Curve(u, zero, zero), Curve(w, zero, zero)),
+            spec.shank,
+            spec.thigh,
+            timeline.t,
+            strict=False,
+        )
+    gaps = []
+    for kind, q in (
+        ("hip_pitch", thigh.p),
+        ("knee", shank.p - thigh.p),
+        ("ankle_pitch", -shank.p),
+    ):
+        lo, hi = spec.joint_limits[kind]
+        gaps.append(np.maximum(lo - q, q - hi).max(axis=(1, 2)))
+    gap = np.max(gaps, axis=0)
+    return np.where(np.isnan(gap), np.inf, gap)
+
+
+def hip_height_bounds(
+    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float], lift: float
+) -> tuple[float, float]:
+    """Lowest and highest pelvis height Hz [m] any tilt in ``tilt_range`` admits.
+
+    Lowest: the knees stay within their joint limits (d ≥ d_min of
+    ``knee_distance_range``) at every sample, both legs, with the smallest lift.
+    This is a necessary condition only: the hip- and ankle-pitch limits cut
+    further into the box and are checked per individual (``joint_gap``).
+    Highest: both legs reach every target (d < d_max), which is decided in the
+    double support where the lift plays no part. Each is a closed form per
+    sample (w is affine in h = Hz − Lan with slope 1/cos λ):
+    h ≥ cos λ (√(d_min² − u²) − w₀) and h ≤ cos λ (√(d_max² − u²) − w₀),
+    with w₀ the value of w at h = 0.
+    """
+    d_min, d_max = knee_distance_range(spec)
+    tilts = np.linspace(*tilt_range, _TILT_GRID)
+    u, w0, c, _ = leg_vectors(spec, timeline, spec.ankle_height, lift, tilts)
+    with np.errstate(invalid="ignore"):
+        need = np.where(u**2 < d_min**2, c * (np.sqrt(d_min**2 - u**2) - w0), -np.inf)
+        room = np.where(u**2 < d_max**2, c * (np.sqrt(d_max**2 - u**2) - w0), -np.inf)
+    low = need.max(axis=(1, 2)).min()
+    high = room.min(axis=(1, 2)).max()
+    return spec.ankle_height + low, spec.ankle_height + high - 1e-6
+
+
+def swing_lift_bounds(
+    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float]
+) -> tuple[float, float]:
+    """Smallest and largest swing lift Szmax [m] worth searching.
+
+    Smallest: ``MIN_CLEARANCE``. Largest: at the highest pelvis each tilt admits,
+    the swing knee stays within its limit at mid-swing: w₀ + h/cos λ − ℓ Szmax/cos λ
+    ≥ √(d_min² − u²) for every SSP sample (ℓ > 0), best over the tilts.
+    """
+    d_min, d_max = knee_distance_range(spec)
+    tilts = np.linspace(*tilt_range, _TILT_GRID)
+    u, w0, c, shape = leg_vectors(spec, timeline, spec.ankle_height, 0.0, tilts)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        room = np.where(u**2 < d_max**2, c * (np.sqrt(d_max**2 - u**2) - w0), -np.inf)
+        h = room.min(axis=(1, 2))[:, None, None]  # highest pelvis per tilt
+        lift = np.where(
+            (shape > 1e-9) & (u**2 < d_min**2),
+            (c * w0 + h - c * np.sqrt(d_min**2 - u**2)) / shape,
+            np.inf,
+        )
+    return MIN_CLEARANCE, float(lift.min(axis=(1, 2)).max())
+
+
+def gait_bounds(spec: RobotSpec, params: GaitParams) -> Bounds:
+    """The search box of (Hz, Szmax, tilt), from the spec's kinematics (see each bound)."""
+    timeline = Timeline.of(params)
+    tilts = tilt_bounds(spec)
+    lift = swing_lift_bounds(spec, timeline, tilts)
+    hz = hip_height_bounds(spec, timeline, tilts, lift[0])
+    return Bounds(lower=(hz[0], lift[0], tilts[0]), upper=(hz[1], lift[1], tilts[1]))
+
+
+def ga_params(spec: RobotSpec, step_time: float, slope: float, **overrides) -> GaitParams:
+    """The walk every individual is planned on: the nominal gait at 100 samples per step."""
+    overrides.setdefault("dt", step_time / SAMPLES_PER_STEP)
+    return GaitParams.nominal(spec, step_time, slope=slope, **overrides)
+
+
+@dataclass(frozen=True)
+class GaitProblem:
+    """Minimise the joint work over (Hz, Szmax, tilt) with the ZMP inside the polygon.
+
+    Attributes:
+        spec: The robot.
+        params: Step time, slope, steps and sampling; its Hz, lift and tilt are ignored.
+        bounds: The search box (default: ``gait_bounds``).
+    """
+
+    spec: RobotSpec
+    params: GaitParams
+    bounds: Bounds | None = None
+
+    def __post_init__(self) -> None:
+        if self.bounds is None:
+            object.__setattr__(self, "bounds", gait_bounds(self.spec, self.params))
+
+    def measure(self, population) -> Measurement:
+        """Plan every individual (one ``evaluate`` batch) and check the joint limits.
+
+        Args:
+            population: Rows (Hz [m], Szmax [m], tilt [rad]), shape (P, 3).
+        """
+        X = np.atleast_2d(np.asarray(population, dtype=float))
+        work, margin = evaluate(self.spec, self.params, X)
+        gap = joint_gap(self.spec, Timeline.of(self.params), X)
+        return Measurement(work, margin, np.where(np.isfinite(work), gap, np.inf))
+
+
+def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """Objective and constraint arrays of one treatment, all finite.
+
+    "penalty" (the paper, eq. 6): F = w + 10⁴ when the gait is infeasible (ZMP
+    outside, or a joint past its limit), G = None; an unreachable individual gets
+    F = 2·10⁴ and w is capped at 10⁴ so that no feasible gait scores worse than
+    an infeasible one.
+    "margin": F = w, G = (−min margin [m], joint gap [rad]) ≤ 0, so the search
+    sees how far from feasible an individual is (pymoo sums the positive parts
+    into one violation; both are 0 for a feasible gait, so the units only weigh
+    infeasible ones against each other); unreachable individuals get w = 2·10⁴
+    and G = 1.
+
+    Returns:
+        (F, G): shapes (P,) and (P, 2) or None.
+    """
+    reachable = np.isfinite(m.work) & np.isfinite(m.margin)
+    work = np.where(reachable, np.minimum(m.work, PENALTY), 2 * PENALTY)
+    if constraint == "penalty":
+        return np.where(reachable, work + PENALTY * ~m.feasible, 2 * PENALTY), None
+    if constraint == "margin":
+        G = np.column_stack([-m.margin, m.joint_gap])
+        return work, np.where(reachable[:, None], G, INADMISSIBLE_GAP)
+    raise SlopewalkError(f"constraint {constraint!r}: must be one of {', '.join(CONSTRAINTS)}")
+
+
+def pareto_objectives(m: Measurement) -> tuple[np.ndarray, np.ndarray]:
+    """Objectives (work [J], −min margin [m]) and the admissibility constraint of NSGA-II.
+
+    Returns:
+        (F, G): shapes (P, 2) and (P, 1); G = joint gap [rad] ≤ 0, 1 if unreachable.
+    """
+    reachable = np.isfinite(m.work) & np.isfinite(m.margin)
+    F = np.column_stack(
+        [
+            np.where(reachable, np.minimum(m.work, PENALTY), 2 * PENALTY),
+            np.where(reachable, -m.margin, INADMISSIBLE_GAP),
+        ]
+    )
+    return F, np.where(reachable, m.joint_gap, INADMISSIBLE_GAP)[:, None]
+
+
+def joint_limit_excess(spec: RobotSpec, q) -> dict[str, float]:
+    """Largest excursion of each joint kind beyond its limit [rad] (0 when within).
+
+    Args:
+        q: Joint angles in Table-I order [rad], shape (n, 8).
+    """
+    q = np.asarray(q, dtype=float)
+    out: dict[str, float] = {}
+    for i, kind in enumerate(JOINT_KINDS):
+        lo, hi = spec.joint_limits[kind]
+        excess = float(np.maximum(lo - q[:, i], q[:, i] - hi).max())
+        out[kind] = max(out.get(kind, 0.0), excess, 0.0)
+    return out

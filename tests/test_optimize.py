@@ -1,0 +1,272 @@
+"""The GA of sec. VI: wiring proven on a known optimum, bounds from kinematics, seeds, CLI."""
+
+import json
+import subprocess
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from bench.optimize import GaSettings, non_dominated, random_search, run_ga, run_nsga2
+from planner.errors import SlopewalkError
+from planner.joints import JOINT_KINDS
+from planner.optimize import (
+    PENALTY,
+    Bounds,
+    GaitProblem,
+    Measurement,
+    ga_params,
+    gait_bounds,
+    joint_gap,
+    joint_limit_excess,
+    knee_distance_range,
+    leg_vectors,
+    objectives,
+)
+from planner.plan import evaluate, plan_walk
+from planner.trajectory import GaitParams, Timeline
+
+# ---------------------------------------------------------------- synthetic problem
+
+
+@dataclass(frozen=True)
+class Bowl:
+    """Same interface as GaitProblem: a smooth bowl whose minimum lies outside a feasible ball.
+
+    work = |x − a|², margin = r − |x − c|; the constrained optimum is the point of
+    the ball nearest to a: c + r (a − c)/|a − c|.
+    """
+
+    a: tuple = (0.9, 0.8, -0.5)
+    c: tuple = (0.3, 0.4, 0.1)
+    r: float = 0.25
+    bounds: Bounds = Bounds((0.0, 0.0, -1.0), (1.0, 1.0, 1.0))
+
+    def measure(self, X) -> Measurement:
+        X = np.atleast_2d(X)
+        work = ((X - self.a) ** 2).sum(axis=1)
+        margin = self.r - np.linalg.norm(X - self.c, axis=1)
+        return Measurement(work, margin, np.full(len(X), -1.0))
+
+    @property
+    def optimum(self) -> np.ndarray:
+        a, c = np.array(self.a), np.array(self.c)
+        return c + self.r * (a - c) / np.linalg.norm(a - c)
+
+
+@pytest.mark.parametrize("constraint", ["penalty", "margin"])
+def test_ga_finds_the_constrained_optimum_of_a_bowl(constraint):
+    bowl = Bowl()
+    result = run_ga(bowl, GaSettings(population=60, generations=150, constraint=constraint))
+    assert result.best.feasible
+    assert result.evaluations == 60 * 150
+    # the optimum sits on the constraint's boundary, where the paper's operators
+    # (5 % mutation per variable) converge slowly: 3 % of the box, 1 % in objective
+    np.testing.assert_allclose(result.best.x, bowl.optimum, atol=0.03)
+    assert result.best.work == pytest.approx(((bowl.optimum - bowl.a) ** 2).sum(), rel=0.01)
+    assert np.all(np.diff(result.history) <= 0)  # best so far never gets worse
+
+
+def test_penalty_run_without_a_feasible_point_says_so():
+    bowl = Bowl(r=-0.1)  # an empty feasible set: the margin is negative everywhere
+    result = run_ga(bowl, GaSettings(population=10, generations=5))
+    assert not result.best.feasible
+    assert result.best.objective >= PENALTY
+    assert not result.feasible_history.any()
+
+
+def test_nsga2_front_is_non_dominated_and_spans_the_trade_off():
+    front = run_nsga2(Bowl(), GaSettings(population=30, generations=20))
+    assert np.all(np.diff(front.work) >= 0) and np.all(np.diff(front.margin) > 0)
+    assert front.work.size >= 10
+    work, margin = np.array([1.0, 2.0, 1.5, 3.0]), np.array([0.0, 1.0, 0.5, 0.5])
+    assert non_dominated(work, margin).tolist() == [0, 2, 1]
+
+
+# ---------------------------------------------------------------- the gait problem
+
+
+@pytest.fixture(scope="module")
+def problem(spec):
+    return GaitProblem(spec, ga_params(spec, 1.0, np.deg2rad(22.5)))
+
+
+def test_bounds_come_from_the_kinematics(spec, problem):
+    params, b = problem.params, problem.bounds
+    d_min, d_max = knee_distance_range(spec)
+    kappa = np.pi - np.arccos((spec.shank**2 + spec.thigh**2 - d_min**2) / (2 * spec.shank**2))
+    assert kappa == pytest.approx(spec.joint_limits["knee"][1])  # law of cosines
+    assert d_max == pytest.approx(spec.leg_reach)
+    assert b.upper[2] == pytest.approx(-b.lower[2]) == pytest.approx(0.6)  # ankle roll limit
+    tilts = np.linspace(b.lower[2], b.upper[2], 61)
+    ones = np.ones_like(tilts)
+
+    def reachable(hz):
+        work, _ = evaluate(spec, params, np.column_stack([hz * ones, b.lower[1] * ones, tilts]))
+        return np.isfinite(work).any()
+
+    assert reachable(b.upper[0] - 1e-4) and not reachable(b.upper[0] + 1e-4)
+    timeline = Timeline.of(params)
+
+    def knees_ok(hz, lift):  # some tilt keeps both knees within limits and reach all walk long
+        u, w, _, _ = leg_vectors(spec, timeline, hz, lift, tilts)
+        d = np.hypot(u, w)
+        return ((d >= d_min) & (d < d_max)).all(axis=(1, 2)).any()
+
+    assert knees_ok(b.lower[0] + 1e-4, b.lower[1]) and not knees_ok(b.lower[0] - 1e-4, b.lower[1])
+    assert not knees_ok(b.upper[0] - 1e-4, b.upper[1] + 1e-3)
+    assert gait_bounds(spec, params) == b
+
+
+def test_joint_check_agrees_with_the_planned_joint_angles(spec, problem):
+    """joint_gap rebuilds the IK targets; the plan's joint angles must agree (no drift)."""
+    timeline = Timeline.of(problem.params)
+    rng = np.random.default_rng(3)
+    checked = admissible = 0
+    for x in rng.uniform(problem.bounds.xl, problem.bounds.xu, (16, 3)):
+        params = GaitParams.nominal(
+            spec, 1.0, slope=problem.params.slope, dt=problem.params.dt,
+            hip_height=x[0], swing_lift=x[1], tilt=x[2],
+        )  # fmt: skip
+        try:
+            plan = plan_walk(spec, params)
+        except SlopewalkError:
+            assert joint_gap(spec, timeline, x[None])[0] == np.inf
+            continue
+        expected = max(
+            np.maximum(lo - plan.q[:, i], plan.q[:, i] - hi).max()
+            for i, (lo, hi) in ((i, spec.joint_limits[JOINT_KINDS[i]]) for i in range(1, 7))
+        )
+        gap = joint_gap(spec, timeline, x[None])[0]
+        assert gap == pytest.approx(expected, abs=1e-9)
+        excess = joint_limit_excess(spec, plan.q)
+        assert (gap <= 0) == all(v == 0 for v in excess.values())
+        checked += 1
+        admissible += gap <= 0
+    assert checked >= 8 and 0 < admissible < checked
+
+
+def test_objectives_are_finite_and_rank_infeasible_last():
+    m = Measurement(
+        work=np.array([1.0, 0.5, np.inf, 2.0]),
+        margin=np.array([0.002, -0.001, -np.inf, 0.003]),
+        joint_gap=np.array([-0.01, -0.01, np.inf, 0.004]),
+    )
+    F, G = objectives(m, "penalty")
+    assert G is None and np.all(np.isfinite(F))
+    np.testing.assert_allclose(F, [1.0, 0.5 + PENALTY, 2 * PENALTY, 2.0 + PENALTY])
+    F, G = objectives(m, "margin")
+    assert np.all(np.isfinite(F)) and np.all(np.isfinite(G))
+    np.testing.assert_allclose(G[:, 0], [-0.002, 0.001, 1.0, -0.003])
+    with pytest.raises(SlopewalkError, match="constraint 'x'"):
+        objectives(m, "x")
+
+
+def _rank(best):
+    """Feasible first, then by work; infeasible ones by how far the ZMP leaves the polygon."""
+    return (not best.feasible, best.work if best.feasible else -best.margin)
+
+
+def test_ga_beats_random_search_on_the_same_budget(problem):
+    """800 evaluations (40 x 20), seeds 0-3, the margin treatment for both searches.
+
+    Only ~0.3 % of the box is feasible at 22.5° (the pitch-joint limits cut most
+    of it): with the paper's penalty a small GA that sees no feasible gait drifts
+    towards low-work infeasible ones, so the test uses the margin treatment;
+    results/optimize/README.md compares the treatments on the full budget.
+    """
+    ga, rnd = [], []
+    for seed in range(4):
+        settings = GaSettings(population=40, generations=20, seed=seed, constraint="margin")
+        ga.append(run_ga(problem, settings).best)
+        rnd.append(random_search(problem, settings).best)
+    print(f"\nGA {[_rank(b) for b in ga]}\nrandom {[_rank(b) for b in rnd]}")
+    assert sum(_rank(g) < _rank(r) for g, r in zip(ga, rnd, strict=True)) >= 3
+    assert sum(b.feasible for b in ga) >= 3
+
+
+def test_same_seed_same_result_bit_for_bit(problem):
+    settings = GaSettings(population=12, generations=4, seed=7, constraint="margin")
+    first, second = run_ga(problem, settings), run_ga(problem, settings)
+    assert np.array_equal(first.best.x, second.best.x)
+    assert np.array_equal(first.log["X"], second.log["X"])
+    assert np.array_equal(first.history, second.history)
+    other = run_ga(problem, GaSettings(population=12, generations=4, seed=8, constraint="margin"))
+    assert not np.array_equal(first.log["X"], other.log["X"])
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"population": 1}, "population 1: must be an integer >= 2"),
+        ({"generations": 0}, "generations 0: must be an integer >= 1"),
+        ({"seed": -1}, "seed -1: must be an integer >= 0"),
+        ({"constraint": "soft"}, "constraint 'soft': must be one of penalty, margin"),
+        ({"crossover": 1.5}, "crossover 1.5: must lie in [0, 1]"),
+    ],
+)
+def test_settings_refuse_bad_values(kwargs, message):
+    with pytest.raises(SlopewalkError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        GaSettings(**kwargs)
+
+
+# ---------------------------------------------------------------- command line
+
+
+def _run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "bench.cli", "optimize", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_cli_reports_an_infeasible_penalty_run_plainly(tmp_path):
+    out = tmp_path / "best.json"
+    result = _run(
+        "--slope", "45", "--population", "6", "--generations", "2",
+        "--friction", "0.5", "--pareto", "--out", str(out),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "feasible: NO" in result.stdout and "stays at the penalty" in result.stdout
+    assert "slip predicted" in result.stdout
+    report = json.loads(out.read_text())
+    assert report["feasible"] is False and report["best"]["objective"] >= PENALTY
+    assert report["evaluations"] == 12 and report["check"]["friction"] == 0.5
+    assert report["check"]["slip_predicted"] is True  # tan 45° = 1 > 0.5
+    assert (tmp_path / "best_pareto.csv").read_text().startswith("hip_height_m,")
+    assert (tmp_path / "best_pareto.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--slope", "60"], "slope 60 deg: must lie in (-60, 60) deg"),
+        (["--slope", "10", "--population", "1"], "population 1: must be an integer >= 2"),
+        (["--slope", "10", "--generations", "0"], "generations 0: must be an integer >= 1"),
+        (["--slope", "10", "--step-time", "0"], "step time 0.0 s: must be > 0"),
+        (["--slope", "10", "--friction", "0"], "friction 0.0: must be > 0"),
+        (["--slope", "10", "--seed", "-2"], "seed -2: must be an integer >= 0"),
+        (["--slope", "10", "--foot-length", "-0.1"], "foot length -0.1 m: must be > 0"),
+        (["--slope", "10", "--constraint", "soft"], "invalid choice: 'soft'"),
+        (["--slope", "10", "--population", "many"], "invalid int value: 'many'"),
+        (["--population", "10"], "the following arguments are required: --slope"),
+    ],
+)
+def test_cli_bad_input_is_one_line(tmp_path, flags, message):
+    out = tmp_path / "best.json"
+    result = _run(*flags, "--out", str(out))
+    assert result.returncode == 2
+    assert message in result.stderr, result.stderr
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert list(tmp_path.iterdir()) == []  # nothing half-written
+
+
+def test_problem_definition_needs_neither_pymoo_nor_mujoco():
+    code = (
+        "import sys; sys.modules['pymoo'] = None; sys.modules['mujoco'] = None; "
+        "import planner.optimize"
+    )
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0
