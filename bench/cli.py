@@ -22,7 +22,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def _positive_float(text: str) -> float:
+def _number(text: str) -> float:
     try:
         return float(text)
     except ValueError:
@@ -32,14 +32,14 @@ def _positive_float(text: str) -> float:
 def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = True) -> None:
     p.add_argument(
         "--step-time",
-        type=_positive_float,
+        type=_number,
         required=step_time_required,
         metavar="S",
         help="step completion time t_c [s], > 0",
     )
     p.add_argument(
         "--slope",
-        type=_positive_float,
+        type=_number,
         default=0.0,
         metavar="DEG",
         help="plane inclination [deg], in (-60, 60); positive walks uphill",
@@ -47,19 +47,19 @@ def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tr
     p.add_argument("--robot", metavar="FILE", help="robot spec TOML (default: the paper's biped)")
     p.add_argument(
         "--hip-height",
-        type=_positive_float,
+        type=_number,
         metavar="M",
         help="pelvis-centre height above the plane Hz [m]",
     )
     p.add_argument(
         "--swing-lift",
-        type=_positive_float,
+        type=_number,
         metavar="M",
         help="peak swing-foot lift Szmax [m] (default 0.6 x thigh)",
     )
     p.add_argument(
         "--tilt",
-        type=_positive_float,
+        type=_number,
         metavar="DEG",
         help="peak frontal lean towards the stance foot [deg]",
     )
@@ -75,7 +75,7 @@ def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tr
 def _add_sim_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--friction",
-        type=_positive_float,
+        type=_number,
         default=1.0,
         metavar="MU",
         help="Coulomb friction of feet on the plane, > 0 (1.0)",
@@ -301,7 +301,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mjcf", help="write a self-contained MuJoCo scene of the robot")
     p.add_argument(
         "--slope",
-        type=_positive_float,
+        type=_number,
         default=0.0,
         metavar="DEG",
         help="plane inclination [deg], in (-60, 60)",
@@ -321,21 +321,21 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("optimize", help="GA-optimise Hz, swing lift and tilt on a slope (sec. VI)")
     p.add_argument(
         "--slope",
-        type=_positive_float,
+        type=_number,
         required=True,
         metavar="DEG",
         help="plane inclination [deg], in (-60, 60); positive walks uphill",
     )
     p.add_argument(
         "--step-time",
-        type=_positive_float,
+        type=_number,
         default=1.0,
         metavar="S",
         help="step completion time t_c [s], > 0 (1.0)",
     )
     p.add_argument(
         "--friction",
-        type=_positive_float,
+        type=_number,
         metavar="MU",
         help="friction coefficient of the plane, > 0: report whether the best gait needs more",
     )
@@ -365,7 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--robot", metavar="FILE", help="robot spec TOML (default: the paper's biped)")
     p.add_argument(
         "--foot-length",
-        type=_positive_float,
+        type=_number,
         metavar="M",
         help="toe-to-heel foot length [m] (default: the spec's)",
     )

@@ -121,52 +121,47 @@ def zmp_traces(cases: list[tuple[str, object, object]], path: Path) -> Path:
 
 def joint_torques(plan, result, path: Path) -> Path:
     """Fig. 4: Newton-Euler torques over one step, with the simulated actuator torques."""
-    step = _step_mask(plan, 1)
-    t = plan.t[step] - plan.t[step][0]
-    s = result.series
-    sim = (s["t"] >= plan.t[step][0]) & (s["t"] <= plan.t[step][-1])
-    stance = plan.stance[step][0]
-    order = _table_order_of_mjcf(stance)
-    fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True)
-    for j, ax in enumerate(axes.ravel()):
-        ax.plot(t, plan.tau[step, j], label="Newton-Euler")
-        ax.plot(
-            s["t"][sim] - plan.t[step][0],
-            s["actuator_force"][sim, order[j]],
-            lw=0.7,
-            label="MuJoCo actuator",
-        )
-        ax.set_title(JOINT_NAMES[j].replace("_", " "), fontsize=9)
-        ax.grid(alpha=0.3)
-    axes[0, 0].set_ylabel("torque [N m]")
-    axes[1, 0].set_ylabel("torque [N m]")
-    for ax in axes[1]:
-        ax.set_xlabel("time in step [s]")
-    axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
-    return _save(fig, path)
+    return _joint_panels(
+        plan,
+        result,
+        path,
+        planned=plan.tau,
+        simulated="actuator_force",
+        labels=("Newton-Euler", "MuJoCo actuator"),
+        unit="torque [N m]",
+        scale=1.0,
+    )
 
 
 def joint_angles(plan, result, path: Path) -> Path:
     """Fig. 5: planned vs simulated joint angles θ1..θ8 over one step."""
+    return _joint_panels(
+        plan,
+        result,
+        path,
+        planned=plan.q,
+        simulated="q_simulated",
+        labels=("planned", "simulated"),
+        unit="angle [deg]",
+        scale=np.rad2deg(1.0),
+    )
+
+
+def _joint_panels(plan, result, path, *, planned, simulated, labels, unit, scale) -> Path:
+    """Eight panels (θ1..θ8) over the second step: a planned series and its simulated twin."""
     step = _step_mask(plan, 1)
-    t = plan.t[step] - plan.t[step][0]
+    start = plan.t[step][0]
     s = result.series
-    sim = (s["t"] >= plan.t[step][0]) & (s["t"] <= plan.t[step][-1])
+    sim = (s["t"] >= start) & (s["t"] <= plan.t[step][-1])
     order = _table_order_of_mjcf(plan.stance[step][0])
     fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True)
     for j, ax in enumerate(axes.ravel()):
-        ax.plot(t, np.rad2deg(plan.q[step, j]), label="planned")
-        ax.plot(
-            s["t"][sim] - plan.t[step][0],
-            np.rad2deg(s["q_simulated"][sim, order[j]]),
-            lw=0.8,
-            label="simulated",
-        )
+        ax.plot(plan.t[step] - start, scale * planned[step, j], label=labels[0])
+        ax.plot(s["t"][sim] - start, scale * s[simulated][sim, order[j]], lw=0.8, label=labels[1])
         ax.set_title(f"θ{j + 1} {JOINT_NAMES[j].replace('_', ' ')}", fontsize=9)
         ax.grid(alpha=0.3)
     for ax in axes[:, 0]:
-        ax.set_ylabel("angle [deg]")
+        ax.set_ylabel(unit)
     for ax in axes[1]:
         ax.set_xlabel("time in step [s]")
     axes[0, 0].legend(fontsize=7)
