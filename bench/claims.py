@@ -238,8 +238,8 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
     reports.sort(
         key=lambda item: (
             item[1]["feasible"],
-            item[1]["best"]["min_margin_m"],
             item[1].get("evaluations", 0),
+            item[1]["best"]["min_margin_m"],
         )
     )
 
@@ -301,7 +301,7 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
                 describe(r),
                 simulate(r)[0],
                 _yes(r["feasible"], simulate(r)[1]),
-                str(path),
+                _relative(path, optimize_dir),
             )
         )
     if 30.0 in at:
@@ -339,10 +339,16 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
                     bool(not r["feasible"] and first and first[0] <= spec.foot_length + 0.0100001),
                     simulate(first[2])[1] if first else None,
                 ),
-                str(first[1] if first else path),
+                _relative(first[1] if first else path, optimize_dir),
             )
         )
     return out
+
+
+def _relative(path: Path, optimize_dir) -> str:
+    """``optimize/...`` as cited from results/ (never a machine-specific absolute path)."""
+    root = Path(optimize_dir)
+    return str(Path(root.name) / Path(path).relative_to(root))
 
 
 def _fine_check(report: dict) -> str:
