@@ -74,11 +74,9 @@ def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float)
 def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:
     """Full physics state with the robot at the plan's first pose, soles on the plane."""
     chain = Chain.from_spec(plan.spec)
-    frames = chain.frames(plan.q[:1], plan.stance_sole[:1], plan.stance[:1])[0]
-    frames_zero = chain.frames(np.zeros((1, 8)), np.zeros((1, 3)), plan.stance[:1])[0]
+    frames = chain.frames(plan.q[:1], plan.stance_sole[:1], plan.stance[:1])
+    (pelvis_in_slope,), (pelvis_rotation,) = chain.pelvis_pose(frames, plan.stance[:1])
     R_ws = rotation_slope_to_world(plan.params.slope)
-    pelvis_in_slope = (frames[4, :3, 3] + frames[5, :3, 3]) / 2
-    pelvis_rotation = frames[4, :3, :3] @ frames_zero[4, :3, :3].T  # body is S-aligned at q = 0
     data = mujoco.MjData(model)
     data.qpos[:3] = R_ws @ pelvis_in_slope
     mujoco.mju_mat2Quat(data.qpos[3:7], (R_ws @ pelvis_rotation).reshape(-1))

@@ -220,6 +220,16 @@ class Chain:
         o[9] = o[8] + R[8, :, 0] * self.ankle_height
         return R, o
 
+    def pelvis_pose(self, frames: np.ndarray, stance: np.ndarray):
+        """Pelvis body pose in S from ``frames`` (n, 10, 4, 4): origin (n, 3), rotation (n, 3, 3).
+
+        The origin is midway between the hips (DH frames 4 and 5); the pelvis body is
+        S-aligned at q = 0 and rigid with frame 4, so its rotation is R4(q) R4(0)ᵀ.
+        """
+        zero = self.frames(np.zeros((1, N_JOINTS)), np.zeros((1, 3)), np.asarray(stance)[:1])
+        origin = (frames[:, 4, :3, 3] + frames[:, 5, :3, 3]) / 2
+        return origin, frames[:, 4, :3, :3] @ zero[0, 4, :3, :3].T
+
     def link_coms(self, frames: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """CoM of the 9 links in S [m], shape (n, 9, 3), from ``frames`` (n, 10, 4, 4)."""
         com = self.com[np.asarray(stance)]  # (n, 9, 3)

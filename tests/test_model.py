@@ -110,16 +110,6 @@ def test_written_xml_reproduces_the_compiled_spec(spec):
     assert from_xml.body_mass.sum() == pytest.approx(spec.total_mass, rel=1e-12)
 
 
-def _pelvis_pose(frames: np.ndarray, frames_zero: np.ndarray):
-    """Pelvis origin (midway between DH frames 4 and 5, the hips) and rotation, in S.
-
-    The pelvis body is S-aligned at q = 0 and rigid with DH frame 4, so its rotation is
-    R4(q) R4(0)ᵀ.
-    """
-    origin = (frames[:, 4, :3, 3] + frames[:, 5, :3, 3]) / 2
-    return origin, frames[:, 4, :3, :3] @ frames_zero[4, :3, :3].T
-
-
 def _planner_points(spec, frames, stance, stance_sole) -> dict[str, np.ndarray]:
     """Positions in S of the MJCF's sites from the DH frames, by site name, each (n, 3)."""
     toe, heel = np.array([spec.ankle_to_toe, 0, 0]), np.array([-spec.heel_offset, 0, 0])
@@ -165,7 +155,7 @@ def test_kinematics_match_the_dh_chain(robots, name, slope):
     frames_zero = chain.frames(np.zeros((1, 8)), np.zeros((1, 3)), np.zeros(1, int))[0]
     points = _planner_points(spec, frames, stance, stance_sole)
     coms = chain.link_coms(frames, stance)  # (n, 9, 3)
-    pelvis_origin, pelvis_rotation = _pelvis_pose(frames, frames_zero)
+    pelvis_origin, pelvis_rotation = chain.pelvis_pose(frames, stance)
     q_lr = plan.q_left_right[keep]
 
     model = mujoco.MjModel.from_xml_string(scene_xml(spec, slope=slope))
