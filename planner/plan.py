@@ -283,12 +283,8 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
     mass = chain.mass.sum()
     com = np.einsum("k,nki->ni", chain.mass, coms) / mass
     com_acc = np.einsum("k,nki->ni", chain.mass, dyn.com_acc) / mass
-    stance_force = dyn.stance_force - swing_force
-    stance_moment = dyn.stance_moment - swing_moment - cross(swing_sole - stance_sole, swing_force)
-    total_moment_at_stance = (
-        stance_moment + swing_moment + cross(swing_sole - stance_sole, swing_force)
-    )
-    ground = stance_force + swing_force
+    ground = dyn.stance_force  # the total; the DSP split only moves part of it to the swing foot
+    stance_force = ground - swing_force
     series = {
         "t": flat(timeline.t),
         "q": q,
@@ -297,7 +293,7 @@ def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False
         "tau": tau,
         "zmp": zmp,
         "zmp_lipm": zmp_lipm(com, com_acc, gravity),
-        "cop_ne": cop_of_wrench(ground, total_moment_at_stance, stance_sole),
+        "cop_ne": cop_of_wrench(ground, dyn.stance_moment, stance_sole),
         "com": com,
         "com_acc": com_acc,
         "stance": stance,
