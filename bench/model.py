@@ -98,6 +98,18 @@ def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
     )
 
 
+def check_scene_options(*, slope: float, friction: float, actuators: str, timestep: float):
+    """Raise one SceneError line for a slope, μ, actuator mode or timestep out of range."""
+    if not abs(slope) < MAX_SLOPE:
+        raise SceneError(f"slope {np.rad2deg(slope):.4g} deg: must lie in (-60, 60) deg")
+    if not friction > 0:
+        raise SceneError(f"friction {friction!r}: must be > 0")
+    if actuators not in ACTUATOR_MODES:
+        raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
+    if not timestep > 0:
+        raise SceneError(f"timestep {timestep!r} s: must be > 0")
+
+
 def robot_xml(spec: RobotSpec, *, actuators: str = "stiff") -> str:
     """MJCF text of the pelvis-rooted biped (see module doc)."""
     return compiled_xml(build_robot(spec, actuators=actuators))
@@ -146,12 +158,7 @@ def scene_xml(
     Raises:
         SceneError: a value outside its range, named in one line.
     """
-    if not abs(slope) < MAX_SLOPE:
-        raise SceneError(f"slope {np.rad2deg(slope):.4g} deg: must lie in (-60, 60) deg")
-    if not friction > 0:
-        raise SceneError(f"friction {friction!r}: must be > 0")
-    if not timestep > 0:
-        raise SceneError(f"timestep {timestep!r} s: must be > 0")
+    check_scene_options(slope=slope, friction=friction, actuators=actuators, timestep=timestep)
     servo = servo_settings(spec, actuators)
     mjs = _new_spec(f"{spec.name} on {np.rad2deg(slope):.4g} deg")
     _add_world(mjs, slope=slope, friction=friction, timestep=timestep)

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from bench.events import Event, detect, verdict
-from bench.model import ACTUATOR_MODES, SceneError
+from bench.model import SceneError, check_scene_options
 from bench.playback import Recording, play
 from planner.joints import stance_swing_to_left_right
 from planner.plan import Plan, plan_walk
@@ -56,14 +56,14 @@ class TrialSpec:
     timestep: float = 0.001
 
     def __post_init__(self) -> None:
-        if not self.friction > 0:
-            raise SceneError(f"friction {self.friction!r}: must be > 0")
-        if self.actuators not in ACTUATOR_MODES:
-            raise SceneError(
-                f"actuators {self.actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}"
-            )
         if not 0 < self.timestep <= 0.005:
             raise SceneError(f"timestep {self.timestep!r} s: must lie in (0, 0.005]")
+        check_scene_options(
+            slope=self.gait.slope,
+            friction=self.friction,
+            actuators=self.actuators,
+            timestep=self.timestep,
+        )
 
 
 @dataclass(frozen=True)
