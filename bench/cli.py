@@ -140,7 +140,7 @@ def _cmd_plan(args) -> None:
 
 def _cmd_mjcf(args) -> None:
     from bench.files import atomic_path
-    from bench.model import scene_xml
+    from bench.sim.model import scene_xml
     from planner.spec import load_spec
 
     spec = load_spec(args.robot)
@@ -157,7 +157,7 @@ def _cmd_mjcf(args) -> None:
 
 def _cmd_trial(args) -> None:
     from bench.files import atomic_path
-    from bench.trial import TrialSpec, run_trial
+    from bench.sim.trial import TrialSpec, run_trial
     from planner.spec import load_spec
 
     spec = load_spec(args.robot)
@@ -173,15 +173,15 @@ def _cmd_trial(args) -> None:
 
 
 def _cmd_optimize(args) -> None:
-    from bench.files import atomic_path
-    from bench.optimize import GaSettings, pareto_figure
-    from bench.optimize_case import (
+    from bench.experiments.ga import GaSettings, pareto_figure
+    from bench.experiments.ga_case import (
         optimize_case,
         pareto_csv,
         pareto_paths,
         pareto_title,
         summary_lines,
     )
+    from bench.files import atomic_path
     from planner.spec import load_spec
 
     settings = GaSettings(
@@ -220,7 +220,7 @@ def _cmd_optimize(args) -> None:
 
 
 def _cmd_compare(args) -> None:
-    from bench import compare
+    from bench.experiments import compare
     from bench.files import atomic_path
     from planner.spec import load_spec
 
@@ -253,13 +253,13 @@ def _positive_int(text: str) -> int:
 def _cmd_sweep(args) -> None:
     from pathlib import Path
 
-    from bench.sweep import open_executor, run_sweep
-    from bench.sweep_config import SweepError, load_sweep
+    from bench.experiments.sweep import open_executor, run_sweep
+    from bench.experiments.sweep_config import SweepError, load_sweep
 
     config = load_sweep(args.config)  # the whole file is checked before anything runs
     if args.record:
         try:
-            import bench.recording  # noqa: F401
+            import bench.report.recording  # noqa: F401
         except ImportError as err:
             raise SweepError(f"--record: recordings are unavailable ({err})") from None
     out = Path(args.out) if args.out is not None else Path.cwd() / "results"
@@ -271,8 +271,8 @@ def _cmd_sweep(args) -> None:
     if summary.lost:
         raise SweepError(f"{len(summary.lost)} trials lost with their workers; re-run to resume")
     if args.config is None or args.report:
-        from bench.claims import ga_claims, write_report
-        from bench.sweep_table import read_table
+        from bench.experiments.sweep_table import read_table
+        from bench.report.claims import ga_claims, write_report
         from planner.spec import load_spec
 
         spec = load_spec()
@@ -283,7 +283,7 @@ def _cmd_sweep(args) -> None:
 
 
 def _cmd_benchmark(args) -> None:
-    from bench import benchmark
+    from bench.experiments import benchmark
 
     for name, value in benchmark.run(args.what).items():
         print(f"{name}: {value:.6g}" if isinstance(value, float) else f"{name}: {value}")
@@ -396,14 +396,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "sweep",
         help="run a sweep file's trials in parallel into DIR/sweep.csv (resumable)",
-        description="Run every trial of a sweep file (bench/sweep_config.py has the format), "
+        description="Run every trial of a sweep file (bench/experiments/sweep_config.py has "
+        "the format), "
         "one CSV row per finished trial; re-running skips the finished ones.",
     )
     p.add_argument(
         "config",
         nargs="?",
         metavar="CONFIG",
-        help="sweep TOML (default: bench/sweeps/paper.toml, the paper's sweep)",
+        help="sweep TOML (default: bench/experiments/sweeps/paper.toml, the paper's sweep)",
     )
     p.add_argument(
         "--out",

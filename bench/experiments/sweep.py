@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.sweep_table import SweepTable
+from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
+from bench.experiments.sweep_table import SweepTable
 from planner.errors import SlopewalkError
 
 TABLE_NAME = "sweep.csv"
@@ -49,7 +49,7 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
         trial: The trial.
         record_dir: Where to write ``<trial_id>.rrd``, or None for no recording.
     """
-    from bench.trial import run_trial
+    from bench.sim.trial import run_trial
     from planner.plan import plan_walk
 
     start = time.perf_counter()
@@ -101,7 +101,7 @@ def outcome_columns(result, plan) -> dict:
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
     """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place."""
-    from bench.recording import record_trial
+    from bench.report.recording import record_trial
 
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"

@@ -24,8 +24,8 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
+from bench.experiments.sweep_config import SweepError
 from bench.files import atomic_path
-from bench.sweep_config import SweepError
 
 COLUMNS = (
     # inputs

@@ -4,9 +4,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.contact import decode
-from bench.events import SLIP_DISTANCE, detect, verdict
-from bench.playback import build_model, initial_state, play
+from bench.sim.contact import decode
+from bench.sim.events import SLIP_DISTANCE, detect, verdict
+from bench.sim.playback import build_model, initial_state, play
 from planner.kinematics import rotation_slope_to_world
 from planner.plan import plan_walk
 from planner.trajectory import GaitParams

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.trial import TrialSpec, run_trial
+from bench.sim.trial import TrialSpec, run_trial
 from planner.spec import RobotSpec
 from planner.trajectory import GaitParams
 

@@ -6,7 +6,7 @@ from importlib import resources
 
 
 def test_sweep_report_writes_claims_and_figures(tmp_path):
-    smoke = resources.files("bench") / "sweeps" / "smoke.toml"
+    smoke = resources.files("bench.experiments") / "sweeps" / "smoke.toml"
     result = subprocess.run(
         [
             sys.executable,

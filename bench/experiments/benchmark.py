@@ -87,7 +87,7 @@ def raw_step_rate(steps: int = 5000, repeats: int = 3, *, clock=time.perf_counte
     """
     import mujoco
 
-    from bench.playback import build_model
+    from bench.sim.playback import build_model
 
     spec = load_spec()
     plan = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
@@ -110,8 +110,8 @@ def sim_figures() -> dict:
     detection and the comparison; ``rollout_steps_per_s`` plays a batch of trials
     through ``mujoco.rollout`` on 2 threads.
     """
-    from bench.playback import play_many
-    from bench.trial import TrialSpec, run_trial
+    from bench.sim.playback import play_many
+    from bench.sim.trial import TrialSpec, run_trial
 
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
@@ -151,8 +151,8 @@ def ga_figures() -> dict:
     ``wall_s`` covers the whole search (pymoo's operators included); ``feasible``
     and ``work_J`` say what it found, so a fast but broken run shows.
     """
-    from bench.optimize import GaSettings, run_ga
-    from planner.optimize import GaitProblem, ga_params
+    from bench.experiments.ga import GaSettings, run_ga
+    from planner.gait_search import GaitProblem, ga_params
 
     spec = load_spec()
     problem = GaitProblem(spec, ga_params(spec, NOMINAL_STEP_TIME, np.deg2rad(GA_SLOPE_DEG)))
@@ -168,7 +168,9 @@ def ga_figures() -> dict:
 
 
 def sweep_figures() -> dict:
-    """The default sweep (``bench/sweeps/paper.toml``) end to end on all cores, into a temp dir.
+    """The default sweep (``bench/experiments/sweeps/paper.toml``) end to end on all cores.
+
+    Runs into a temp dir.
 
     ``wall_s`` runs from starting the worker pool to the sorted table. The raw
     rate is measured in the same run, before and after the sweep, in a pool of
@@ -186,8 +188,8 @@ def sweep_figures() -> dict:
     import resource
     import tempfile
 
-    from bench.sweep import open_executor, run_sweep
-    from bench.sweep_config import load_sweep
+    from bench.experiments.sweep import open_executor, run_sweep
+    from bench.experiments.sweep_config import load_sweep
 
     config = load_sweep()
     workers = os.cpu_count() or 1

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.optimize import GaSettings, ParetoFront, RunResult, run_ga, run_nsga2
+from bench.experiments.ga import GaSettings, ParetoFront, RunResult, run_ga, run_nsga2
 from planner.errors import SlopewalkError, UnreachableError
-from planner.optimize import (
+from planner.gait_search import (
     MIN_CLEARANCE,
     PENALTY,
     SAMPLES_PER_STEP,

@@ -1,6 +1,6 @@
 """The CI comparison flags flipped verdicts and grown distances, and nothing else."""
 
-from bench.compare import TOLERANCE_FRACTION, TOLERANCE_MM, check, report
+from bench.experiments.compare import TOLERANCE_FRACTION, TOLERANCE_MM, check, report
 
 
 def _row(case, analytic="stable", simulated="stable", rms=5.0):

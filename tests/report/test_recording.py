@@ -9,10 +9,10 @@ import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-import bench.recording
-from bench.playback import build_model, play
-from bench.recording import LIFT, RecordingError, record_trial
-from bench.trial import TrialSpec, run_trial
+import bench.report.recording
+from bench.report.recording import LIFT, RecordingError, record_trial
+from bench.sim.playback import build_model, play
+from bench.sim.trial import TrialSpec, run_trial
 from planner.joints import MJCF_JOINTS
 from planner.kinematics import rotation_slope_to_world
 from planner.plan import plan_walk
@@ -159,7 +159,7 @@ def test_a_failure_mid_write_leaves_no_file(walk, tmp_path, monkeypatch):
     def boom(*args):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(bench.recording, "_log_plots", boom)
+    monkeypatch.setattr(bench.report.recording, "_log_plots", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         record_trial(tmp_path / "new.rrd", plan, result)
     (tmp_path / "old.rrd").write_bytes(b"previous recording")

@@ -14,15 +14,15 @@ from pathlib import Path
 import pytest
 
 from bench.cli import main
-from bench.sweep import run_one, run_sweep
-from bench.sweep_config import (
+from bench.experiments.sweep import run_one, run_sweep
+from bench.experiments.sweep_config import (
     DEFAULT_SWEEP,
     SWEEPS_DIR,
     SweepError,
     load_sweep,
     sweep_from_dict,
 )
-from bench.sweep_table import COLUMNS, SweepTable
+from bench.experiments.sweep_table import COLUMNS, SweepTable
 from planner.spec import default_spec_path
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
@@ -217,7 +217,7 @@ def test_a_failing_trial_is_an_error_row(tmp_path):
 
 
 def test_recording_per_trial(tmp_path):
-    pytest.importorskip("bench.recording")
+    pytest.importorskip("bench.report.recording")
     trial = load_sweep(SMOKE).trials[0]
     row = run_one(trial, str(tmp_path))
     assert row["error"] == ""

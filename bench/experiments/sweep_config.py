@@ -48,8 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.model import ACTUATOR_MODES
-from bench.trial import TrialSpec
+from bench.sim.model import ACTUATOR_MODES
+from bench.sim.trial import TrialSpec
 from planner.errors import SlopewalkError
 from planner.spec import LINK_NAMES, RobotSpec, load_spec
 from planner.trajectory import GaitParams
@@ -174,7 +174,7 @@ class SweepConfig:
 
 
 def load_sweep(path: str | Path | None = None) -> SweepConfig:
-    """Read and check a sweep file (default: ``bench/sweeps/paper.toml``).
+    """Read and check a sweep file (default: ``bench/experiments/sweeps/paper.toml``).
 
     Raises:
         SweepError: unreadable file, unknown key, value out of range or missing

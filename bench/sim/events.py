@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bench.playback import Recording
+from bench.sim.playback import Recording
 from planner.joints import MJCF_JOINTS
 
 SLIP_DISTANCE = 0.005  # [m]

@@ -25,8 +25,8 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from bench.contact import TrialSensors, add_trial_sensors, decode
-from bench.model import SceneError, mujoco_message, scene_xml, servo_settings
+from bench.sim.contact import TrialSensors, add_trial_sensors, decode
+from bench.sim.model import SceneError, mujoco_message, scene_xml, servo_settings
 from planner.kinematics import Chain, rotation_slope_to_world
 from planner.plan import Plan
 

@@ -8,7 +8,7 @@ p = 10⁴ when the ZMP leaves the support polygon.
 Why two modules: ``planner`` imports numpy/scipy only (DESIGN.md), so the problem
 *definition* lives here - the variables, their bounds derived from the spec's
 kinematics, the objective and constraint arrays and the paper's penalty - while
-the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/optimize.py``.
+the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/experiments/ga.py``.
 Any other optimiser can solve a ``GaitProblem`` through ``measure`` and
 ``objectives`` without pymoo.
 

@@ -33,8 +33,8 @@ import numpy as np
 import rerun as rr
 
 from bench.files import atomic_path
-from bench.playback import build_model
-from bench.trial import TrialResult
+from bench.sim.playback import build_model
+from bench.sim.trial import TrialResult
 from planner.errors import SlopewalkError
 from planner.joints import MJCF_JOINTS
 from planner.kinematics import rotation_slope_to_world

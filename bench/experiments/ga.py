@@ -1,7 +1,7 @@
 """The pymoo driver of the gait problem: GA (sec. VI), NSGA-II front, random search.
 
 The problem itself (variables, bounds, objective, penalty) is defined in
-``planner/optimize.py``, which stays numpy-only as DESIGN.md asks of ``planner``;
+``planner/gait_search.py``, which stays numpy-only as DESIGN.md asks of ``planner``;
 this module adds pymoo. A problem is anything with ``bounds`` (``xl``, ``xu``) and
 ``measure(X) -> Measurement``, so a synthetic problem drives the same code in
 the tests. Each generation's population is planned in one vectorised
@@ -44,7 +44,7 @@ from pymoo.operators.mutation.pm import PM
 from tqdm import tqdm
 
 from planner.errors import SlopewalkError
-from planner.optimize import CONSTRAINTS, objectives, pareto_objectives
+from planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,7 @@ class GaSettings:
         population: Individuals per generation, ≥ 2.
         generations: Generations including the initial one, ≥ 1.
         seed: Seed of the run's random generator, ≥ 0.
-        constraint: "penalty" (paper, eq. 6) or "margin" (``planner.optimize.objectives``).
+        constraint: "penalty" (paper, eq. 6) or "margin" (``planner.gait_search.objectives``).
         crossover: Probability that a mating pair is crossed (SBX), in [0, 1].
         mutation: Probability that one variable of a child is mutated (PM), in [0, 1].
     """
@@ -123,7 +123,7 @@ class _Log:
 
 
 class _PymooProblem(Problem):
-    """A ``planner.optimize`` problem seen by pymoo: the whole population per call."""
+    """A ``planner.gait_search`` problem seen by pymoo: the whole population per call."""
 
     def __init__(self, problem, mode: str):
         self.inner, self.mode, self.log = problem, mode, _Log()
@@ -240,7 +240,7 @@ def run_ga(problem, settings: GaSettings, *, progress: bool = False) -> RunResul
     """Minimise the problem's objective with pymoo's GA under ``settings`` (module doc).
 
     Args:
-        problem: A ``planner.optimize.GaitProblem`` or anything with its interface.
+        problem: A ``planner.gait_search.GaitProblem`` or anything with its interface.
         progress: Show a tqdm bar (one tick per generation) on stderr.
     """
     pymoo_problem = _PymooProblem(problem, settings.constraint)

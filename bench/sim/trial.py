@@ -27,9 +27,9 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from bench.events import Event, detect, verdict
-from bench.model import SceneError, check_scene_options
-from bench.playback import Recording, play
+from bench.sim.events import Event, detect, verdict
+from bench.sim.model import SceneError, check_scene_options
+from bench.sim.playback import Recording, play
 from planner.joints import stance_swing_to_left_right
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec

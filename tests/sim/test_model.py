@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.model import (
+from bench.sim.model import (
     SceneError,
     build_robot,
     robot_xml,
@@ -29,7 +29,7 @@ from planner.plan import plan_walk
 from planner.spec import LinkInertial
 from planner.trajectory import GaitParams
 
-MJCF_DIR = Path(__file__).resolve().parents[1] / "mjcf"
+MJCF_DIR = Path(__file__).resolve().parents[2] / "mjcf"
 SLOPES = (0.0, np.deg2rad(15.0))  # [rad]
 STRIDE = 7  # subsample the 1 kHz plans
 
@@ -92,7 +92,8 @@ def test_committed_mjcf_is_what_the_default_spec_generates(spec, tmp_path):
     for generated in (robot, scene):
         committed = MJCF_DIR / generated.name
         assert committed.read_text() == generated.read_text(), (
-            f"{committed} drifted from bench.model; run bench.model.write_default_mjcf('mjcf')"
+            f"{committed} drifted from bench.sim.model; "
+            "run bench.sim.model.write_default_mjcf('mjcf')"
         )
         mujoco.MjModel.from_xml_path(str(committed))
     assert (MJCF_DIR / "biped.xml").read_text() == robot_xml(spec)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from bench.events import detect, verdict
-from bench.playback import build_model, control_sequence, initial_state, recording_from_rollout
-from bench.trial import TrialSpec, run_trial
+from bench.sim.events import detect, verdict
+from bench.sim.playback import build_model, control_sequence, initial_state, recording_from_rollout
+from bench.sim.trial import TrialSpec, run_trial
 from planner.kinematics import rotation_slope_to_world
 from planner.plan import plan_walk
 from planner.spec import default_spec_path
