@@ -40,10 +40,29 @@ from planner.joints import LEFT, RIGHT
 MAX_SLOPE = np.deg2rad(60.0)
 TILT_PROFILES = ("sway", "hold")
 
+# The nominal gait of any robot, as fractions of its own lengths, fixed so that the
+# paper's robot (sec. VII-A: ankle 0.032 m above the sole, L1 = L2 = 0.111 m) walks
+# at its nominal Hz = 0.20 m, L = L1, Szmax = 0.6·L1 (exactly: the products below
+# give 0.2 back in floating point for that robot).
+#
+# Hip height: the hip-ankle distance Hz − Lan is this share of the leg reach L1 + L2,
+# so a robot scaled in all lengths stands with the same knee bend (about 0.757 of the
+# reach; 0.20 m fixed would put a twice-as-large robot in a deep crouch).
+NOMINAL_REACH_FRACTION = (0.20 - 0.032) / (0.111 + 0.111)
+# Swing lift Szmax and step length L, as shares of the thigh L1.
+NOMINAL_LIFT_PER_THIGH = 0.6
+NOMINAL_STEP_PER_THIGH = 1.0
+# The tilt is an angle and stays 12°: it needs no scaling for a robot scaled in all
+# lengths (every joint angle of the walk is then the same).
+NOMINAL_TILT = np.deg2rad(12.0)
+
 
 @dataclass(frozen=True)
 class GaitParams:
     """What to walk: step time, slope and the three GA variables.
+
+    The defaults of the length fields are the paper's robot's; for any other robot
+    use ``GaitParams.nominal(spec, ...)``, which derives them from the spec.
 
     Attributes:
         step_time: Duration T of one step (DSP + SSP) [s], > 0.
@@ -62,7 +81,7 @@ class GaitParams:
     slope: float = 0.0
     hip_height: float = 0.20
     swing_lift: float = 0.0666
-    tilt: float = np.deg2rad(12.0)
+    tilt: float = NOMINAL_TILT
     steps: int = 4
     step_length: float = 0.111
     ssp_fraction: float = 0.6
@@ -101,8 +120,17 @@ class GaitParams:
 
     @classmethod
     def nominal(cls, spec, step_time: float, **overrides) -> GaitParams:
-        """The paper's nominal gait for ``spec``: L = thigh, Szmax = 0.6·thigh."""
-        base = {"step_length": spec.thigh, "swing_lift": 0.6 * spec.thigh}
+        """The nominal gait for ``spec``, scaled from the paper's (Hz 0.20 m, L = L1).
+
+        Hz = Lan + 0.757·(L1 + L2) (``NOMINAL_REACH_FRACTION``), Szmax = 0.6·L1,
+        L = L1, tilt 12°, all in [m] and [rad]; for the paper's robot Hz = 0.20 m,
+        Szmax = 0.0666 m, L = 0.111 m. ``overrides`` replace any field.
+        """
+        base = {
+            "hip_height": spec.ankle_height + NOMINAL_REACH_FRACTION * spec.leg_reach,
+            "step_length": NOMINAL_STEP_PER_THIGH * spec.thigh,
+            "swing_lift": NOMINAL_LIFT_PER_THIGH * spec.thigh,
+        }
         base.update(overrides)
         return cls(step_time=step_time, **base)
 
