@@ -5,6 +5,9 @@ Built with ``mujoco.MjSpec``, MuJoCo's own model-editing API: it ships with the
 ``MjModel`` and writes MJCF with ``to_xml``. Its writer prints 6 significant digits
 (exact for the spec's values; a test checks the text reproduces the compiled spec)
 and spells a position actuator ``<general>`` with gainprm kp, biasprm (0, −kp, −kv).
+The slope is no spec value: 6 digits of the floor's quaternion would turn 12° into
+11.999946°, so ``scene_xml`` writes the floor's orientation itself, as an ``euler``
+angle about y in radians (the file's ``<compiler angle="radian">``) with 17 digits.
 
 ``robot_xml`` is the pelvis-rooted biped: bodies named after their joints
 (``l_thigh`` carries ``l_hip_pitch``), frames as in ``planner/robots/bioloid.toml``,
@@ -20,6 +23,7 @@ never each other, so a fall shows as a non-foot contact.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -168,7 +172,25 @@ def scene_xml(
     pelvis.pos, pelvis.quat = R @ pelvis.pos, _quat(R)
     key = mjs.key("home")
     key.qpos = np.concatenate([pelvis.pos, pelvis.quat, list(key.qpos)[7:]])
-    return compiled_xml(mjs)
+    return _exact_floor(compiled_xml(mjs), slope)
+
+
+_FLOOR_QUAT = re.compile(r'(<geom name="floor"[^>]*?) quat="[^"]*"')
+
+
+def _exact_floor(xml: str, slope: float) -> str:
+    """``xml`` with the floor's 6-digit ``quat`` replaced by ``euler="0 −θs 0"`` [rad].
+
+    17 significant digits read back as the same double, so the compiled plane is
+    tilted by exactly ``slope`` (MuJoCo turns a one-axis euler into cos, sin of θs/2).
+    A level floor has no ``quat`` attribute and is left as it is.
+    """
+    if slope == 0.0:
+        return xml
+    exact, found = _FLOOR_QUAT.subn(rf'\1 euler="0 {-slope:.17g} 0"', xml, count=1)
+    if found != 1:
+        raise SceneError("MuJoCo's writer changed: no quat on the floor geom to write exactly")
+    return exact
 
 
 def stance_rooted_xml(spec: RobotSpec, stance: int) -> str:

@@ -284,3 +284,24 @@ def test_home_key_puts_both_soles_on_the_tilted_plane_with_the_scene_friction(sp
     feet = {model.geom(f"{p}foot").id for p in SIDE_PREFIX}
     assert data.ncon == 8 and all({floor, *feet} >= set(c.geom) for c in contacts)
     assert all(c.dim == 3 and c.friction[0] == pytest.approx(mu) for c in contacts)
+
+
+@pytest.mark.parametrize("slope_deg", [12.0, -7.3, 30.0, 45.123456789])
+def test_written_floor_is_tilted_by_exactly_the_slope(spec, slope_deg, tmp_path):
+    """The XML `slopewalk mjcf` writes, read back by MuJoCo: the plane's tilt is the slope.
+
+    MuJoCo's writer keeps 6 digits of a quaternion (12° read back as 11.999946°, an
+    error of 1e-6 rad); the floor's orientation must survive the text to 1e-12 rad.
+    """
+    slope = np.deg2rad(slope_deg)
+    path = tmp_path / "scene.xml"
+    path.write_text(scene_xml(spec, slope=slope))
+    model = mujoco.MjModel.from_xml_path(str(path))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    R = data.geom("floor").xmat.reshape(3, 3)
+    normal, uphill = R[:, 2], R[:, 0]
+    tilt = np.arctan2(np.hypot(normal[0], normal[1]), normal[2])
+    assert tilt == pytest.approx(abs(slope), abs=1e-12)
+    assert np.arctan2(uphill[2], uphill[0]) == pytest.approx(slope, abs=1e-12)  # x_S goes up
+    np.testing.assert_allclose(R, rotation_slope_to_world(slope), atol=1e-15)
