@@ -17,73 +17,96 @@ import numpy as np  # noqa: E402
 from bench.files import atomic_path  # noqa: E402
 from planner.joints import JOINT_NAMES, MJCF_JOINTS  # noqa: E402
 
-_VERDICT_COLOR = {
-    "stable": "tab:green",
-    "zmp_outside": "tab:red",
-    "slip": "tab:orange",
-    "tip": "tab:purple",
-    "fall": "tab:red",
-    "diverged": "black",
-    "error": "grey",
+# One colour and one marker per outcome, so no two are told apart by hue alone: the
+# Okabe-Ito palette (distinct under the common colour-vision deficiencies) and shapes
+# that also differ in greyscale. "stable" is the same on both sides, so agreement shows.
+_VERDICT_STYLE = {  # verdict: (colour, marker)
+    "stable": ("#009E73", "o"),  # bluish green, circle
+    "zmp_outside": ("#D55E00", "s"),  # vermillion, square
+    "slip": ("#E69F00", ">"),  # orange, right triangle
+    "tip": ("#CC79A7", "^"),  # reddish purple, up triangle
+    "fall": ("#000000", "v"),  # black, down triangle
+    "diverged": ("#0072B2", "X"),  # blue, cross
+    "error": ("#999999", "x"),  # grey, thin cross
 }
+_ANALYTIC_VERDICTS = ("stable", "zmp_outside")
+_SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged")
+# Events after which the simulated CoP is no longer compared (bench/sim/trial.py).
+_LOST = ("tip", "fall", "diverged")
+
+
+def _style(verdict: str) -> tuple[str, str]:
+    return _VERDICT_STYLE.get(verdict, _VERDICT_STYLE["error"])
 
 
 def stability_map(rows: list[dict], path: Path) -> Path:
-    """Step time × slope, one panel per friction: face = analytic, ring = simulated verdict."""
+    """Step time × slope, one panel per friction: inner filled marker = analytic verdict,
+    outer open marker = simulated verdict (each outcome its own colour and shape)."""
     rows = [r for r in rows if not r["mass_scale"] and r["actuators"] == "stiff"]
     frictions = sorted({r["friction"] for r in rows})
     fig, axes = plt.subplots(
         1,
         max(1, len(frictions)),
-        figsize=(4.2 * max(1, len(frictions)), 4),
+        figsize=(4.2 * max(1, len(frictions)), 4.3),
         sharey=True,
         squeeze=False,
     )
     for ax, mu in zip(axes[0], frictions, strict=False):
         for r in (r for r in rows if r["friction"] == mu):
+            colour, marker = _style(r["simulated_verdict"])
             ax.scatter(
-                r["step_time"],
-                r["slope_deg"],
-                s=110,
-                c="white",
-                edgecolors=_VERDICT_COLOR.get(r["simulated_verdict"], "grey"),
-                linewidths=2.5,
-            )
+                r["step_time"], r["slope_deg"], s=190, marker=marker, facecolors="white",
+                edgecolors=colour, linewidths=2.2, zorder=2,
+            )  # fmt: skip
+            colour, marker = _style(r["analytic_verdict"])
             ax.scatter(
-                r["step_time"],
-                r["slope_deg"],
-                s=35,
-                c=_VERDICT_COLOR.get(r["analytic_verdict"], "grey"),
-            )
+                r["step_time"], r["slope_deg"], s=38, marker=marker, c=colour,
+                edgecolors="none", zorder=3,
+            )  # fmt: skip
         ax.set_title(f"μ = {mu:g}")
         ax.set_xlabel("step time [s]")
         ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("slope [deg]")
-    handles = [
-        plt.Line2D([], [], marker="o", ls="", color=c, label=v)
-        for v, c in _VERDICT_COLOR.items()
-        if v not in ("error",)
-    ]
-    fig.legend(
-        handles=handles,
-        loc="upper center",
-        ncol=6,
-        fontsize=8,
-        title="dot = analytic, ring = simulated",
-    )
+    for side, verdicts, filled, anchor in (
+        ("analytic (filled, inside)", _ANALYTIC_VERDICTS, True, (0.3, 1.0)),
+        ("simulated (open, outside)", _SIMULATED_VERDICTS, False, (0.65, 1.0)),
+    ):
+        fig.legend(
+            handles=[_legend_marker(v, filled=filled) for v in verdicts],
+            loc="upper center",
+            bbox_to_anchor=anchor,
+            ncol=len(verdicts),
+            fontsize=8,
+            title=side,
+            title_fontsize=8,
+        )
     fig.tight_layout(rect=(0, 0, 1, 0.84))
     return _save(fig, path)
+
+
+def _legend_marker(verdict: str, *, filled: bool):
+    colour, marker = _style(verdict)
+    face = colour if filled else "white"
+    size = 7 if filled else 10
+    return plt.Line2D(
+        [], [], marker=marker, ls="", markersize=size, markerfacecolor=face,
+        markeredgecolor=colour, markeredgewidth=0 if filled else 2, label=verdict,
+    )  # fmt: skip
 
 
 def zmp_traces(cases: list[tuple[str, object, object]], path: Path) -> Path:
     """The paper's Fig. 2-3 with the simulated CoP added: one step in the stance foot's frame.
 
     Args:
-        cases: (title, plan, trial result) per panel; the second step (k = 1) is drawn.
+        cases: (title, plan, trial result) per panel; the single support of the second
+            step (k = 1) is drawn. Where the simulated CoP stops short (the robot tipped,
+            fell or diverged: ``bench/sim/trial.py`` compares only before that), the
+            panel says when and why.
     """
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.5 * len(cases), 4.5), squeeze=False)
+    fig, axes = plt.subplots(1, len(cases), figsize=(4.5 * len(cases), 4.8), squeeze=False)
     for ax, (title, plan, result) in zip(axes[0], cases, strict=True):
-        step = _step_mask(plan, 1) & ~plan.double_support  # single support, as in the paper
+        k, step = _step(plan, 1)
+        step = step & ~plan.double_support  # single support, as in the paper
         origin = plan.stance_sole[step][0, :2]
         spec = plan.spec
         rect = np.array(
@@ -109,7 +132,13 @@ def zmp_traces(cases: list[tuple[str, object, object]], path: Path) -> Path:
             lw=0.8,
             label="simulated CoP (while standing)",
         )
-        ax.set_title(title)
+        note = _lost_note(result, plan.t[step][0], plan.t[step][-1], any_cop=sim.any())
+        if note:
+            ax.text(
+                0.02, 0.98, note, transform=ax.transAxes, fontsize=7, va="top",
+                color="#D55E00", bbox={"facecolor": "white", "alpha": 0.85, "lw": 0},
+            )  # fmt: skip
+        ax.set_title(f"{title}\nstep {k + 1} of {plan.params.steps}, single support", fontsize=10)
         ax.set_xlabel("x along the slope [mm]")
         ax.set_ylabel("y [mm]")
         ax.set_aspect("equal")
@@ -148,8 +177,11 @@ def joint_angles(plan, result, path: Path) -> Path:
 
 
 def _joint_panels(plan, result, path, *, planned, simulated, labels, unit, scale) -> Path:
-    """Eight panels (θ1..θ8) over the second step: a planned series and its simulated twin."""
-    step = _step_mask(plan, 1)
+    """Eight panels (θ1..θ8) over the second step: a planned series and its simulated twin.
+
+    The figure's title names the case (slope, step time, μ, actuators, Hz) and the step.
+    """
+    k, step = _step(plan, 1)
     start = plan.t[step][0]
     s = result.series
     sim = (s["t"] >= start) & (s["t"] <= plan.t[step][-1])
@@ -165,8 +197,40 @@ def _joint_panels(plan, result, path, *, planned, simulated, labels, unit, scale
     for ax in axes[1]:
         ax.set_xlabel("time in step [s]")
     axes[0, 0].legend(fontsize=7)
+    fig.suptitle(_case_title(plan, result, k, start, plan.t[step][-1]), fontsize=10)
     fig.tight_layout()
     return _save(fig, path)
+
+
+def _case_title(plan, result, k: int, start: float, end: float) -> str:
+    """E.g. ``flat, t_c = 1 s, μ = 1, stiff actuators, Hz 0.200 m: step 2 of 4 (...)``."""
+    g, trial = plan.params, result.trial
+    slope = np.rad2deg(g.slope)
+    where = "flat" if slope == 0 else f"slope {slope:g}°"
+    stance = "left" if plan.stance[plan.t >= start][0] == 0 else "right"
+    return (
+        f"{where}, t_c = {g.step_time:g} s, μ = {trial.friction:g}, {trial.actuators} actuators, "
+        f"Hz {g.hip_height:.3f} m, tilt {np.rad2deg(g.tilt):g}° — step {k + 1} of {g.steps} "
+        f"(t = {start:g} … {end:.3g} s, {stance} foot stance)"
+    )
+
+
+def _lost_note(result, start: float, end: float, *, any_cop: bool) -> str:
+    """Why the simulated CoP is missing or cut short in [start, end] [s]; "" if it is not."""
+    lost = next((e for e in result.events if e.kind in _LOST), None)
+    if lost is None or lost.time > end:
+        return "" if any_cop else "no simulated CoP: no foot on the plane"
+    after = next((e for e in result.events if e.kind == "fall"), None)
+    fell = f"; fell at {after.time:.2f} s" if after and after is not lost else ""
+    if any_cop:
+        head = f"simulated CoP ends at {lost.time:.2f} s: {lost.kind}"
+    else:
+        head = (
+            f"no simulated CoP: {lost.kind} at {lost.time:.2f} s{fell},\n"
+            f"before this single support ({start:.2f} … {end:.2f} s)"
+        )
+        fell = ""
+    return f"{head}{fell}\n{lost.cause}"
 
 
 def lipm_vs_step_time(step_times, analytic_mm, simulated_mm, path: Path) -> Path:
@@ -183,10 +247,11 @@ def lipm_vs_step_time(step_times, analytic_mm, simulated_mm, path: Path) -> Path
     return _save(fig, path)
 
 
-def _step_mask(plan, k: int) -> np.ndarray:
+def _step(plan, k: int) -> tuple[int, np.ndarray]:
+    """Step k (0-based, clamped to the walk) and the mask of its samples."""
     T = plan.params.step_time
     k = min(k, plan.params.steps - 1)
-    return (plan.t >= k * T) & (plan.t < (k + 1) * T)
+    return k, (plan.t >= k * T) & (plan.t < (k + 1) * T)
 
 
 def _table_order_of_mjcf(stance: int) -> list[int]:
