@@ -49,11 +49,12 @@ def _rows_in(path: Path) -> int:
 
 
 def _short_legged_robot(directory: Path) -> Path:
-    """The paper's biped with 5 cm thigh and shank: the nominal hip height is out of reach."""
-    text = default_spec_path().read_text()
-    text = text.replace("\nthigh = 0.111", "\nthigh = 0.05").replace(
-        "\nshank = 0.111", "\nshank = 0.05"
-    )
+    """The paper's biped with a 1 cm shank: no plan reaches its hips.
+
+    The nominal hip-ankle distance, 0.757 (L1 + L2) = 0.092 m, is shorter than the
+    leg folds (L1 − L2 = 0.101 m), so the hip target is out of reach.
+    """
+    text = default_spec_path().read_text().replace("\nshank = 0.111", "\nshank = 0.01")
     path = directory / "short.toml"
     path.write_text(text)
     return path
@@ -134,7 +135,7 @@ def test_robot_paths_are_relative_to_the_sweep_file(tmp_path):
     (tmp_path / "s.toml").write_text('[grid]\nrobot = ["short.toml", "default"]\n')
     config = load_sweep(tmp_path / "s.toml")
     assert [t.robot for t in config.trials] == ["short.toml", "default"]
-    assert config.trials[0].spec.thigh == 0.05 and config.trials[1].spec.thigh == 0.111
+    assert config.trials[0].spec.shank == 0.01 and config.trials[1].spec.shank == 0.111
 
 
 def test_shipped_sweeps_parse():
