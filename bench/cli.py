@@ -49,7 +49,8 @@ def _add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tr
         "--hip-height",
         type=_number,
         metavar="M",
-        help="pelvis-centre height above the plane Hz [m]",
+        help="pelvis-centre height above the plane Hz [m] "
+        "(default ankle height + 0.757 x (thigh + shank): 0.20 for the paper's biped)",
     )
     p.add_argument(
         "--swing-lift",
