@@ -154,8 +154,10 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
     """Plan one walk of ``params.steps`` steps for ``spec`` (see module doc).
 
     Raises:
+        GaitError: a length no pose of ``spec`` reaches (``GaitParams.check_fits``).
         UnreachableError: the hip height or lift asks a leg for more than it reaches.
     """
+    params.check_fits(spec)
     timeline = Timeline.of(params)
     walk = _solve(
         spec,

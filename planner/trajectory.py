@@ -28,12 +28,15 @@ Both are converted to each leg's tilted plane in ``ik.tilted_plane_height``.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from planner import ranges
 from planner.errors import GaitError
 from planner.joints import LEFT, RIGHT
 
@@ -89,33 +92,69 @@ class GaitParams:
     tilt_profile: str = "hold"
 
     def __post_init__(self) -> None:
-        _check(self.step_time > 0, f"step time {self.step_time!r} s: must be > 0")
+        # Types and finiteness first: every later comparison may then trust a real number.
+        ranges.DT.check("dt", self.dt, GaitError)
+        ranges.STEP_TIME.check("step time", self.step_time, GaitError)
         _check(
-            abs(self.slope) < MAX_SLOPE,
-            f"slope {np.rad2deg(self.slope):.4g} deg: must lie in (-60, 60) deg",
+            self.step_time >= 10 * self.dt,
+            f"step time {ranges.show(self.step_time)} s: must lie in [{10 * self.dt:g}, "
+            f"{ranges.STEP_TIME.high:g}] s (at least 10 samples of dt = {self.dt:g} s)",
         )
-        _check(self.hip_height > 0, f"hip height {self.hip_height!r} m: must be > 0")
-        _check(self.swing_lift >= 0, f"swing lift {self.swing_lift!r} m: must be >= 0")
+        ranges.SLOPE_DEG.check("slope", _degrees(self.slope), GaitError)
+        _positive_length("hip height", self.hip_height)
         _check(
-            abs(self.tilt) < np.pi / 4,
-            f"tilt {np.rad2deg(self.tilt):.4g} deg: must lie in (-45, 45) deg",
+            _finite(self.swing_lift) and self.swing_lift >= 0,
+            f"swing lift {ranges.show(self.swing_lift)} m: must be a finite length >= 0 m",
         )
-        _check(
-            isinstance(self.steps, int | np.integer) and self.steps >= 1,
-            f"steps {self.steps!r}: must be an integer >= 1",
-        )
-        _check(self.step_length > 0, f"step length {self.step_length!r} m: must be > 0")
-        _check(
-            0 < self.ssp_fraction < 1,
-            f"ssp fraction {self.ssp_fraction!r}: must lie in (0, 1)",
-        )
+        ranges.TILT_DEG.check("tilt", _degrees(self.tilt), GaitError)
+        ranges.STEPS.check("steps", self.steps, GaitError)
+        _positive_length("step length", self.step_length)
+        ranges.Range(0.0, 1.0, high_open=True).check("ssp fraction", self.ssp_fraction, GaitError)
         _check(
             self.tilt_profile in TILT_PROFILES,
             f"tilt profile {self.tilt_profile!r}: must be one of {', '.join(TILT_PROFILES)}",
         )
+        samples = self.samples
         _check(
-            0 < self.dt <= self.step_time / 10,
-            f"dt {self.dt!r} s: must lie in (0, step_time/10 = {self.step_time / 10:g}] s",
+            samples <= ranges.MAX_SAMPLES,
+            f"a walk of {self.steps} steps of {self.step_time:g} s at dt {self.dt:g} s has "
+            f"{samples:.3g} samples: must be <= {ranges.MAX_SAMPLES:.0e} (fewer steps, "
+            "shorter steps or a longer dt)",
+        )
+
+    @property
+    def samples(self) -> int:
+        """Number of plan samples, the closing DSP included (as ``Timeline`` makes them)."""
+        duration = (self.steps + 1 - self.ssp_fraction) * self.step_time
+        return int(round(duration / self.dt)) + 1
+
+    def check_fits(self, spec) -> None:
+        """Refuse lengths that no pose of ``spec`` can reach, before any computing.
+
+        Hz cannot exceed the straight leg on its ankle (ankle height + thigh + shank),
+        the swing sole cannot rise above the ankle being at the hip
+        (Szmax < Hz - ankle height), and a step cannot be longer than both legs.
+        Nearer targets that are still out of reach are found by the IK at their time.
+
+        Raises:
+            GaitError: naming the value and the range the robot allows.
+        """
+        top = spec.ankle_height + spec.leg_reach
+        _check(
+            self.hip_height <= top,
+            f"hip height {self.hip_height:g} m: must lie in (0, {top:.4g}] m for "
+            f"{spec.name} (ankle height + thigh + shank)",
+        )
+        lift = self.hip_height - spec.ankle_height
+        _check(
+            self.swing_lift < lift,
+            f"swing lift {self.swing_lift:g} m: must lie in [0, {lift:.4g}) m for {spec.name} "
+            f"at hip height {self.hip_height:g} m (hip height - ankle height)",
+        )
+        _check(
+            self.step_length <= 2 * spec.leg_reach,
+            f"step length {self.step_length:g} m: must lie in (0, {2 * spec.leg_reach:.4g}] m "
+            f"for {spec.name} (two legs)",
         )
 
     @classmethod
@@ -132,12 +171,30 @@ class GaitParams:
             "swing_lift": NOMINAL_LIFT_PER_THIGH * spec.thigh,
         }
         base.update(overrides)
-        return cls(step_time=step_time, **base)
+        gait = cls(step_time=step_time, **base)
+        gait.check_fits(spec)
+        return gait
 
 
 def _check(ok: bool, message: str) -> None:
     if not ok:
         raise GaitError(message)
+
+
+def _finite(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _degrees(radians):
+    """Radians to degrees for the message, leaving a non-number as it is."""
+    return float(np.rad2deg(radians)) if _finite(radians) or isinstance(radians, float) else radians
+
+
+def _positive_length(name: str, value) -> None:
+    _check(
+        _finite(value) and value > 0,
+        f"{name} {ranges.show(value)} m: must be a finite length > 0 m",
+    )
 
 
 @dataclass(frozen=True)

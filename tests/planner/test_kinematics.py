@@ -118,7 +118,7 @@ def test_joint_rates_are_derivatives_of_angles(spec):
 
 def test_unreachable_hip_height_names_time_and_distance(spec):
     with pytest.raises(UnreachableError, match=r"t = .* s: hip-ankle distance .* m"):
-        plan_walk(spec, GaitParams.nominal(spec, 1.0, hip_height=0.30))
+        plan_walk(spec, GaitParams.nominal(spec, 1.0, hip_height=0.25))
 
 
 def test_frames_are_the_product_of_eq1_transforms(spec):
