@@ -7,6 +7,8 @@ model are both built from it. Body-frame conventions are documented at the top o
 
 from __future__ import annotations
 
+import difflib
+import math
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -15,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import SpecError
+from planner.ranges import Range
 
 LINK_NAMES = ("pelvis", "thigh", "shank", "ankle", "foot")
 JOINT_KINDS = ("hip_pitch", "knee", "ankle_pitch", "ankle_roll")
@@ -45,19 +48,22 @@ class LinkInertial:
     inertia: tuple[float, float, float]
 
     def __post_init__(self) -> None:
-        if not self.mass > 0:
-            raise SpecError(f"links.{self.name}.mass = {self.mass!r}: must be > 0 kg")
+        where = f"links.{self.name}"
+        MASS.check(f"{where}.mass", self.mass, SpecError)
+        _check_vector3(f"{where}.com", self.com, COM)
+        _check_vector3(f"{where}.inertia", self.inertia, FINITE_INERTIA)
         ixx, iyy, izz = self.inertia
         if min(self.inertia) <= 0:
             raise SpecError(
-                f"links.{self.name}.inertia = {list(self.inertia)}: "
+                f"{where}.inertia {list(self.inertia)} kg m^2: "
                 "every principal moment must be > 0 (positive definite)"
             )
         if ixx + iyy < izz or iyy + izz < ixx or izz + ixx < iyy:
             raise SpecError(
-                f"links.{self.name}.inertia = {list(self.inertia)}: violates the triangle "
+                f"{where}.inertia {list(self.inertia)} kg m^2: violates the triangle "
                 "inequality (each moment must be <= the sum of the other two)"
             )
+        _check_vector3(f"{where}.inertia", self.inertia, INERTIA)
 
     @property
     def inertia_matrix(self) -> np.ndarray:
@@ -95,21 +101,25 @@ class RobotSpec:
     no_load_speed: float
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name.strip()):
+            raise SpecError(f"name {self.name!r}: must be a non-empty string")
         for key in GEOMETRY_KEYS:
-            value = getattr(self, key)
-            if not value > 0:
-                raise SpecError(f"geometry.{key} = {value!r}: must be > 0 m")
-        if not 0 < self.ankle_to_toe < self.foot_length:
+            LENGTH.check(f"geometry.{key}", getattr(self, key), SpecError)
+        if not self.ankle_to_toe < self.foot_length:
             raise SpecError(
-                f"geometry.ankle_to_toe = {self.ankle_to_toe!r}: must lie in "
-                f"(0, foot_length = {self.foot_length})"
+                f"geometry.ankle_to_toe {self.ankle_to_toe!r} m: must lie in "
+                f"(0, foot_length = {self.foot_length!r}) m (the ankle stands over the foot)"
             )
-        for kind, (lower, upper) in self.joint_limits.items():
+        for kind, pair in self.joint_limits.items():
+            lower, upper = pair
+            for bound in pair:
+                JOINT_ANGLE.check(f"joint_limits.{kind}", bound, SpecError)
             if not lower < upper:
-                raise SpecError(f"joint_limits.{kind} = [{lower}, {upper}]: lower must be < upper")
-        for key in ("stall_torque", "no_load_speed"):
-            if not getattr(self, key) > 0:
-                raise SpecError(f"servo.{key} = {getattr(self, key)!r}: must be > 0")
+                raise SpecError(
+                    f"joint_limits.{kind} [{lower!r}, {upper!r}] rad: lower must be < upper"
+                )
+        for key, allowed in SERVO.items():
+            allowed.check(f"servo.{key}", getattr(self, key), SpecError)
 
     @property
     def heel_offset(self) -> float:
@@ -127,17 +137,30 @@ class RobotSpec:
         leg = sum(self.links[n].mass for n in LINK_NAMES if n != "pelvis")
         return self.links["pelvis"].mass + 2 * leg
 
+    def foot_length_range(self, extend: str = "both") -> Range:
+        """Foot lengths [m] ``with_foot_length(..., extend=extend)`` accepts.
+
+        The ankle must stay over the sole: extending the toe keeps the heel
+        offset, the heel keeps the ankle-to-toe offset, "both" keeps their difference.
+        """
+        F, a = self.foot_length, self.ankle_to_toe
+        shortest = {"toe": F - a, "heel": a, "both": abs(F - 2 * a)}
+        if extend not in shortest:
+            raise SpecError(f"extend {extend!r}: must be one of toe, heel, both")
+        return Range(shortest[extend], LENGTH.high, "m")
+
     def with_foot_length(self, foot_length: float, *, extend: str = "both") -> RobotSpec:
         """A copy with a longer or shorter foot.
 
         Args:
-            foot_length: New toe-to-heel length [m].
+            foot_length: New toe-to-heel length [m], in ``foot_length_range(extend)``.
             extend: "toe", "heel" or "both" (half each) - where the change goes.
         """
+        self.foot_length_range(extend).check(
+            f"foot length (extending the {extend})", foot_length, SpecError
+        )
         delta = foot_length - self.foot_length
         shift = {"toe": delta, "heel": 0.0, "both": delta / 2}
-        if extend not in shift:
-            raise SpecError(f"extend = {extend!r}: must be one of toe, heel, both")
         toe = self.ankle_to_toe + shift[extend]
         return _replace(self, foot_length=foot_length, ankle_to_toe=toe)
 
@@ -163,8 +186,7 @@ class RobotSpec:
                 else scale.get("legs", scale.get("all", 1.0))
             )
             factor = scale.get(name, group)
-            if not (isinstance(factor, int | float) and factor > 0):
-                raise SpecError(f"mass scale {name} = {factor!r}: must be > 0")
+            MASS_SCALE.check(f"mass scale {name}", factor, SpecError)
             links[name] = LinkInertial(
                 name, link.mass * factor, link.com, tuple(i * factor for i in link.inertia)
             )
@@ -185,71 +207,130 @@ def default_spec_path() -> Path:
 def load_spec(path: str | Path | None = None) -> RobotSpec:
     """Read a RobotSpec from a TOML file (default: the paper's biped).
 
+    The file format is documented for users in ``docs/robot-spec.md``.
+
     Raises:
-        SpecError: unreadable file, missing key or non-physical value, in one line.
+        SpecError: unreadable file, not UTF-8 TOML, a missing or unknown key, a value
+            of the wrong type or out of its range, in one line naming file, key and value.
     """
     path = Path(path) if path is not None else default_spec_path()
+    where = f"robot spec {str(path)!r}"
     try:
         with open(path, "rb") as f:
             data = tomllib.load(f)
     except FileNotFoundError:
-        raise SpecError(f"robot spec {str(path)!r}: no such file") from None
+        raise SpecError(f"{where}: no such file") from None
+    except IsADirectoryError:
+        raise SpecError(f"{where}: is a directory, not a TOML file") from None
+    except OSError as err:
+        raise SpecError(f"{where}: cannot read ({err.strerror or err})") from None
+    except UnicodeDecodeError as err:
+        raise SpecError(
+            f"{where}: not UTF-8 text (byte {err.object[err.start]:#04x} at offset {err.start})"
+        ) from None
     except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"robot spec {str(path)!r}: not valid TOML ({err})") from None
+        raise SpecError(f"{where}: not valid TOML ({err})") from None
     return spec_from_dict(data, source=str(path))
 
 
 def spec_from_dict(data: dict, *, source: str = "<dict>") -> RobotSpec:
     """Build a RobotSpec from the parsed TOML tables (see ``load_spec``)."""
-    geometry = _table(data, "geometry", source)
-    links_table = _table(data, "links", source)
-    limits = _table(data, "joint_limits", source)
-    servo = _table(data, "servo", source)
+    try:
+        return _spec_from_dict(data, source)
+    except SpecError as err:
+        raise SpecError(f"robot spec {source!r}: {err}") from None
+
+
+TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo")
+LINK_KEYS = ("mass", "com", "inertia")
+
+
+def _spec_from_dict(data: dict, source: str) -> RobotSpec:
+    _known(data, TOP_KEYS, "")
+    geometry = _table(data, "geometry")
+    links_table = _table(data, "links")
+    limits = _table(data, "joint_limits")
+    servo = _table(data, "servo")
+    _known(geometry, GEOMETRY_KEYS, "geometry.")
+    _known(links_table, LINK_NAMES, "links.")
+    _known(limits, JOINT_KINDS, "joint_limits.")
+    _known(servo, tuple(SERVO), "servo.")
     links = {}
     for name in LINK_NAMES:
-        link = _table(links_table, name, source, prefix="links.")
+        link = _table(links_table, name, prefix="links.")
+        _known(link, LINK_KEYS, f"links.{name}.")
         links[name] = LinkInertial(
             name,
-            _number(link, "mass", f"links.{name}", source),
-            _vector3(link, "com", f"links.{name}", source),
-            _vector3(link, "inertia", f"links.{name}", source),
+            _number(link, "mass", f"links.{name}"),
+            _vector(link, "com", f"links.{name}"),
+            _vector(link, "inertia", f"links.{name}"),
         )
-    joint_limits = {}
-    for kind in JOINT_KINDS:
-        pair = limits.get(kind)
-        if not (isinstance(pair, list) and len(pair) == 2):
-            raise SpecError(f"{source}: joint_limits.{kind} must be [lower, upper] in rad")
-        joint_limits[kind] = (float(pair[0]), float(pair[1]))
+    joint_limits = {kind: _vector(limits, kind, "joint_limits", 2) for kind in JOINT_KINDS}
     return RobotSpec(
-        name=str(data.get("name", Path(source).stem)),
-        **{key: _number(geometry, key, "geometry", source) for key in GEOMETRY_KEYS},
+        name=data.get("name", Path(source).stem),
+        **{key: _number(geometry, key, "geometry") for key in GEOMETRY_KEYS},
         links=links,
         joint_limits=joint_limits,
-        stall_torque=_number(servo, "stall_torque", "servo", source),
-        no_load_speed=_number(servo, "no_load_speed", "servo", source),
+        stall_torque=_number(servo, "stall_torque", "servo"),
+        no_load_speed=_number(servo, "no_load_speed", "servo"),
     )
 
 
-def _table(data: dict, key: str, source: str, prefix: str = "") -> dict:
+def _known(table: dict, allowed: tuple[str, ...], prefix: str) -> None:
+    """Refuse a key the format does not have, suggesting the nearest known one."""
+    for key in table:
+        if key not in allowed:
+            near = difflib.get_close_matches(str(key), allowed, n=1)
+            hint = f"did you mean {prefix}{near[0]}? " if near else ""
+            raise SpecError(f"unknown key {prefix}{key} ({hint}known: {', '.join(allowed)})")
+
+
+def _table(data: dict, key: str, prefix: str = "") -> dict:
     value = data.get(key)
+    if value is None:
+        raise SpecError(f"missing table [{prefix}{key}]")
     if not isinstance(value, dict):
-        raise SpecError(f"{source}: missing table [{prefix}{key}]")
+        raise SpecError(f"{prefix}{key} = {value!r}: must be a table [{prefix}{key}]")
     return value
 
 
-def _number(table: dict, key: str, where: str, source: str) -> float:
+def _number(table: dict, key: str, where: str):
+    """The value of a number key as a float; a non-number stays as it is for the range check."""
     if key not in table:
-        raise SpecError(f"{source}: missing key {where}.{key}")
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise SpecError(f"{source}: {where}.{key} = {value!r} must be a number")
-    return float(value)
+        raise SpecError(f"missing key {where}.{key}")
+    return _float(table[key])
 
 
-def _vector3(table: dict, key: str, where: str, source: str) -> tuple[float, float, float]:
+def _float(value):
+    return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else value
+
+
+def _vector(table: dict, key: str, where: str, size: int = 3) -> tuple:
     if key not in table:
-        raise SpecError(f"{source}: missing key {where}.{key}")
+        raise SpecError(f"missing key {where}.{key}")
     value = table[key]
-    if not (isinstance(value, list) and len(value) == 3):
-        raise SpecError(f"{source}: {where}.{key} = {value!r} must be a list of 3 numbers")
-    return tuple(float(v) for v in value)
+    if not (isinstance(value, list) and len(value) == size):
+        raise SpecError(f"{where}.{key} {value!r}: must be a list of {size} numbers")
+    return tuple(_float(v) for v in value)
+
+
+def _check_vector3(name: str, value, allowed: Range) -> None:
+    if not (isinstance(value, tuple | list) and len(value) == 3):
+        raise SpecError(f"{name} {value!r}: must be 3 numbers")
+    for v in value:
+        allowed.check(name, v, SpecError)
+
+
+# Allowed ranges: from a toy robot to beyond human scale; values past them are typos
+# or stand-ins for infinity, and would overflow the dynamics long before a walk.
+LENGTH = Range(0.0, 5.0, "m")  # every geometry length
+MASS = Range(0.0, 1000.0, "kg")  # per link
+INERTIA = Range(0.0, 1000.0, "kg m^2")  # principal moments about the CoM
+COM = Range(-5.0, 5.0, "m", low_open=False)  # each component, in the link frame
+JOINT_ANGLE = Range(-2 * np.pi, 2 * np.pi, "rad", low_open=False)
+SERVO = {
+    "stall_torque": Range(0.0, 1e4, "N m"),
+    "no_load_speed": Range(0.0, 1e3, "rad/s"),
+}
+MASS_SCALE = Range(0.0, 1e3)
+FINITE_INERTIA = Range(-math.inf, math.inf, "kg m^2")
