@@ -33,6 +33,7 @@ import numpy as np
 from planner.errors import SlopewalkError
 from planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
 from planner.kinematics import rotation_slope_to_world
+from planner.ranges import FRICTION
 from planner.spec import JOINT_KINDS, RobotSpec, load_spec
 from planner.trajectory import MAX_SLOPE, GaitParams
 
@@ -106,8 +107,7 @@ def check_scene_options(*, slope: float, friction: float, actuators: str, timest
     """Raise one SceneError line for a slope, μ, actuator mode or timestep out of range."""
     if not abs(slope) < MAX_SLOPE:
         raise SceneError(f"slope {np.rad2deg(slope):.4g} deg: must lie in (-60, 60) deg")
-    if not friction > 0:
-        raise SceneError(f"friction {friction!r}: must be > 0")
+    FRICTION.check("friction", friction, SceneError)
     if actuators not in ACTUATOR_MODES:
         raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
     if not timestep > 0:

@@ -92,7 +92,12 @@ class TrialResult:
     series: dict = field(repr=False, compare=False)
 
     def scalars(self) -> dict:
-        """Everything but the series, JSON-ready (angles in degrees at this edge)."""
+        """Everything but the series, strict JSON (angles in degrees at this edge).
+
+        A value that does not exist (NaN: no walk sample to compare) is ``null``, and
+        ``null_because`` says why for each such key; each event carries its ``phase``
+        (``settling`` before the walk starts at t = 0, ``walk``, or ``hold`` after it).
+        """
         gait = asdict(self.trial.gait)
         gait["slope_deg"] = float(np.rad2deg(gait.pop("slope")))
         gait["tilt_deg"] = float(np.rad2deg(gait.pop("tilt")))
@@ -101,8 +106,30 @@ class TrialResult:
             "gait": gait,
             **{k: v for k, v in asdict(self.trial).items() if k != "gait"},
         }
-        out["events"] = [asdict(e) for e in self.events]
-        return json.loads(json.dumps(out, default=float))
+        out["events"] = [{**asdict(e), "phase": self.phase(e.time)} for e in self.events]
+        out = json.loads(json.dumps(out, default=float), parse_constant=lambda _: None)
+        missing = [k for k, v in out.items() if v is None]
+        if missing:
+            out["null_because"] = {k: self.why_missing() for k in missing}
+        return out
+
+    def phase(self, time: float) -> str:
+        """ "settling" before the walk starts (t < 0), "walk", or "hold" after its end."""
+        g = self.trial.gait
+        if time < 0:
+            return "settling"
+        return "walk" if time <= (g.steps + 1 - g.ssp_fraction) * g.step_time else "hold"
+
+    def why_missing(self) -> str:
+        """Why the simulated comparison has no value (NaN), in one sentence."""
+        lost = [e for e in self.events if e.kind in ("tip", "fall", "diverged")]
+        first = min(lost, key=lambda e: e.time, default=None)
+        if first is not None and first.time <= 0:
+            return (
+                f"the robot was lost before the walk began ({first.kind} at "
+                f"t = {first.time:.3f} s, {self.phase(first.time)}): no walk sample to compare"
+            )
+        return "no walk sample where the robot stood with a loaded foot"
 
     def summary_lines(self) -> list[str]:
         g = self.trial.gait
@@ -113,17 +140,32 @@ class TrialResult:
             f"{self.analytic_min_margin * 1e3:7.2f} mm, max friction ratio "
             f"{self.max_friction_ratio:.3f} ({'>' if self.slip_predicted else '<='} mu)",
             f"simulated: {self.simulated_verdict:<12} min CoP margin "
-            f"{self.simulated_min_margin * 1e3:7.2f} mm, max friction ratio "
-            f"{self.simulated_max_friction_ratio:.3f}",
-            f"ZMP analytic vs simulated: RMS {self.zmp_rms * 1e3:.2f} mm, max "
-            f"{self.zmp_max * 1e3:.2f} mm over {self.standing_fraction:.0%} of the walk",
-            f"joint tracking RMS {np.rad2deg(self.tracking_rms):.2f} deg; peak torque planned "
-            f"{self.peak_torque_planned:.3f} / simulated {self.peak_torque_simulated:.3f} N m",
+            f"{_mm(self.simulated_min_margin):>7} mm, max friction ratio "
+            f"{_num(self.simulated_max_friction_ratio, '.3f')}",
+            f"ZMP analytic vs simulated: RMS {_mm(self.zmp_rms)} mm, max "
+            f"{_mm(self.zmp_max)} mm over {self.standing_fraction:.0%} of the walk",
+            f"joint tracking RMS {_num(np.rad2deg(self.tracking_rms), '.2f')} deg; peak torque "
+            f"planned {self.peak_torque_planned:.3f} / simulated "
+            f"{self.peak_torque_simulated:.3f} N m",
         ]
-        lines += [f"event {e.time:7.3f} s  {e.kind:<12} {e.cause}" for e in self.events[:8]]
+        if not np.isfinite(self.zmp_rms):
+            lines.append(f"n/a: {self.why_missing()}")
+        lines += [
+            f"event {e.time:7.3f} s  {e.kind:<12} {e.cause}"
+            + (f"  ({self.phase(e.time)})" if self.phase(e.time) != "walk" else "")
+            for e in self.events[:8]
+        ]
         if len(self.events) > 8:
             lines.append(f"... and {len(self.events) - 8} more events")
         return lines
+
+
+def _num(value: float, spec: str) -> str:
+    return format(value, spec) if np.isfinite(value) else "n/a"
+
+
+def _mm(value: float) -> str:
+    return _num(value * 1e3, ".2f")
 
 
 def run_trial(

@@ -235,8 +235,11 @@ def test_inverse_dynamics_match_mj_inverse(robots, name, slope):
     [
         ({"slope": np.deg2rad(60.0)}, "slope 60 deg: must lie in (-60, 60) deg"),
         ({"slope": np.deg2rad(-75.0)}, "slope -75 deg"),
-        ({"friction": 0.0}, "friction 0.0: must be > 0"),
-        ({"friction": float("nan")}, "friction nan"),
+        ({"friction": 0.0}, "friction 0.0: must lie in (0, 10]"),
+        ({"friction": float("nan")}, "friction nan: must lie in (0, 10]"),
+        ({"friction": float("inf")}, "friction inf: must lie in (0, 10]"),
+        ({"friction": 1e6}, "friction 1000000.0: must lie in (0, 10]"),
+        ({"friction": "1"}, "friction '1': must lie in (0, 10]"),
         ({"actuators": "soft"}, "actuators 'soft': must be one of stiff, servo"),
         ({"timestep": -1e-3}, "timestep -0.001 s"),
     ],
