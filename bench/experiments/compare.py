@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.sim.trial import TrialSpec, run_trial
+from planner.errors import SlopewalkError
 from planner.spec import RobotSpec
 from planner.trajectory import GaitParams
 
@@ -61,6 +62,7 @@ def check(rows: list[dict], baseline: list[dict] | None) -> list[str]:
     for row in rows:
         before = old.get(row["case"])
         if before is None:
+            problems.append(f"{row['case']}: not in the baseline (refresh it: --write-baseline)")
             continue
         for key in ("analytic_verdict", "simulated_verdict"):
             if row[key] != before[key]:
@@ -101,6 +103,48 @@ def report(rows: list[dict], baseline: list[dict] | None, problems: list[str]) -
     return "\n".join(lines) + "\n"
 
 
-def load_baseline(path: str | Path) -> list[dict] | None:
+class CompareError(SlopewalkError):
+    """A baseline that is missing, empty or not a list of case rows."""
+
+
+BASELINE_KEYS = ("case", "analytic_verdict", "simulated_verdict", "zmp_rms_mm")
+
+
+def load_baseline(path: str | Path) -> list[dict]:
+    """The baseline rows of ``path`` (written by ``slopewalk compare --write-baseline``).
+
+    Raises:
+        CompareError: a missing, unreadable, empty or malformed file, or one that covers
+            none of ``CASES``: a check against nothing must not pass.
+    """
     path = Path(path)
-    return json.loads(path.read_text()) if path.exists() else None
+    where = f"baseline {str(path)!r}"
+    hint = "; write one with `slopewalk compare --write-baseline`"
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CompareError(f"{where}: no such file{hint}") from None
+    except IsADirectoryError:
+        raise CompareError(f"{where}: is a directory, not a JSON file") from None
+    except UnicodeDecodeError:
+        raise CompareError(f"{where}: not UTF-8 text") from None
+    except OSError as err:
+        raise CompareError(f"{where}: cannot read ({err.strerror})") from None
+    if not text.strip():
+        raise CompareError(f"{where}: is empty{hint}")
+    try:
+        rows = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise CompareError(f"{where}: not valid JSON ({err})") from None
+    if not isinstance(rows, list) or not rows:
+        raise CompareError(f"{where}: must be a non-empty list of case rows{hint}")
+    for i, row in enumerate(rows):
+        missing = [k for k in BASELINE_KEYS if not isinstance(row, dict) or k not in row]
+        if missing:
+            raise CompareError(f"{where}: row {i} lacks {', '.join(missing)}")
+        if not isinstance(row["zmp_rms_mm"], int | float) or isinstance(row["zmp_rms_mm"], bool):
+            raise CompareError(f"{where}: row {i} zmp_rms_mm {row['zmp_rms_mm']!r}: not a number")
+    known = {name for name, _, _ in CASES}
+    if not known & {row["case"] for row in rows}:
+        raise CompareError(f"{where}: covers none of the cases {', '.join(sorted(known))}")
+    return rows

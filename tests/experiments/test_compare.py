@@ -1,6 +1,18 @@
 """The CI comparison flags flipped verdicts and grown distances, and nothing else."""
 
-from bench.experiments.compare import TOLERANCE_FRACTION, TOLERANCE_MM, check, report
+import json
+
+import pytest
+
+from bench.experiments.compare import (
+    CASES,
+    TOLERANCE_FRACTION,
+    TOLERANCE_MM,
+    CompareError,
+    check,
+    load_baseline,
+    report,
+)
 
 
 def _row(case, analytic="stable", simulated="stable", rms=5.0):
@@ -34,4 +46,40 @@ def test_distance_may_grow_only_within_tolerance():
 
 
 def test_no_baseline_checks_nothing():
+    """Only for --write-baseline: the CLI refuses a missing baseline (load_baseline)."""
     assert check([_row("a")], None) == []
+
+
+def test_a_case_missing_from_the_baseline_is_a_problem():
+    assert check([_row("a"), _row("b")], [_row("a")]) == [
+        "b: not in the baseline (refresh it: --write-baseline)"
+    ]
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (None, "no such file"),
+        ("", "is empty"),
+        ("  \n", "is empty"),
+        ("[]", "must be a non-empty list"),
+        ("{}", "must be a non-empty list"),
+        ("[{", "not valid JSON"),
+        ('[{"case": "flat 2 s"}]', "row 0 lacks analytic_verdict"),
+        (json.dumps([_row("flat 2 s", rms="5")]), "zmp_rms_mm '5': not a number"),
+        (json.dumps([_row("another robot's case")]), "covers none of the cases"),
+    ],
+)
+def test_a_missing_empty_or_foreign_baseline_is_refused(tmp_path, content, message):
+    path = tmp_path / "baseline.json"
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(CompareError, match=message):
+        load_baseline(path)
+
+
+def test_the_committed_baseline_loads():
+    from pathlib import Path
+
+    rows = load_baseline(Path(__file__).parents[2] / "results" / "compare_baseline.json")
+    assert {row["case"] for row in rows} == {name for name, _, _ in CASES}
