@@ -1,0 +1,249 @@
+"""What each ``slopewalk`` subcommand does, given its parsed flags.
+
+Every command checks all of its output paths first, then reads its inputs, then
+computes, and writes its outputs together at the end (``bench.files``), so bad
+input costs no time and leaves nothing behind. Degrees at the command line,
+radians inside.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+import numpy as np
+
+from bench.files import atomic_paths, check_output, check_output_dir
+from planner.errors import SlopewalkError
+
+
+def gait_from_args(args, spec):
+    """GaitParams from parsed flags (degrees → radians here)."""
+    from planner.trajectory import GaitParams
+
+    overrides = {
+        "slope": np.deg2rad(args.slope),
+        "steps": args.steps,
+        "tilt_profile": args.tilt_profile,
+    }
+    if args.hip_height is not None:
+        overrides["hip_height"] = args.hip_height
+    if args.swing_lift is not None:
+        overrides["swing_lift"] = args.swing_lift
+    if args.tilt is not None:
+        overrides["tilt"] = np.deg2rad(args.tilt)
+    return GaitParams.nominal(spec, args.step_time, **overrides)
+
+
+def plan(args) -> None:
+    from planner.plan import plan_walk
+    from planner.spec import load_spec
+
+    check_output(args.out)
+    spec = load_spec(args.robot)
+    plan = plan_walk(spec, gait_from_args(args, spec))
+    with atomic_paths(args.out) as (tmp,), open(tmp, "wb") as f:
+        plan.save_npz(f)
+    summary = plan.summary()
+    p = plan.params
+    print(
+        f"plan: {spec.name}, {p.steps} steps of {p.step_time:g} s on "
+        f"{np.rad2deg(p.slope):g} deg, Hz {p.hip_height:.4f} m, lift {p.swing_lift:.4f} m, "
+        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.tilt_profile}), {plan.t.size} samples"
+    )
+    print(
+        f"verdict: {summary['verdict']}  (min ZMP margin {summary['min_margin_m'] * 1e3:.2f} mm"
+        f" at t = {summary['time_of_min_margin_s']:.3f} s)"
+    )
+    print(
+        f"work: {summary['work_J']:.4f} J   max friction ratio: "
+        f"{summary['max_friction_ratio']:.3f}   max |ZMP - LIPM|: "
+        f"{summary['max_lipm_distance_m'] * 1e3:.2f} mm"
+    )
+    print(
+        "peak torque [N m]: "
+        + ", ".join(f"{k} {v:.3f}" for k, v in summary["peak_torque_Nm"].items())
+    )
+    print(f"wrote {args.out}")
+
+
+def mjcf(args) -> None:
+    from bench.sim.model import scene_xml
+    from planner.spec import load_spec
+
+    check_output(args.out)
+    spec = load_spec(args.robot)
+    xml = scene_xml(
+        spec, slope=np.deg2rad(args.slope), friction=args.friction, actuators=args.actuators
+    )
+    with atomic_paths(args.out) as (tmp,):
+        tmp.write_text(xml)
+    print(
+        f"wrote {args.out}: {spec.name} on {args.slope:g} deg, mu {args.friction:g}, "
+        f"{args.actuators} actuators"
+    )
+
+
+def trial(args) -> None:
+    from bench.sim.trial import TrialSpec, run_trial
+    from planner.plan import plan_walk
+    from planner.spec import load_spec
+
+    outputs = {"--out": args.out, "--series": args.series, "--record": args.record}
+    outputs = {flag: path for flag, path in outputs.items() if path is not None}
+    _distinct(outputs)
+    for flag, path in outputs.items():
+        check_output(path, name=flag)
+    if args.record is not None:
+        record_trial = _recorder("--record")
+    spec = load_spec(args.robot)
+    trial = TrialSpec(gait_from_args(args, spec), friction=args.friction, actuators=args.actuators)
+    plan = plan_walk(spec, trial.gait)
+    result = run_trial(spec, trial, plan=plan)
+    with atomic_paths(*outputs.values()) as tmps:
+        tmp = dict(zip(outputs, tmps, strict=True))
+        tmp["--out"].write_text(json.dumps(result.scalars(), indent=2, allow_nan=False) + "\n")
+        if "--series" in tmp:
+            with open(tmp["--series"], "wb") as f:
+                np.savez_compressed(f, **result.series)
+        if "--record" in tmp:
+            record_trial(tmp["--record"], plan, result)
+    print("\n".join(result.summary_lines()))
+    print("wrote " + ", ".join(str(p) for p in outputs.values()))
+
+
+def _recorder(flag: str):
+    """``record_trial``, or one line saying why recordings are unavailable."""
+    try:
+        from bench.report.recording import record_trial
+    except ImportError as err:
+        raise SlopewalkError(f"{flag}: recordings are unavailable ({err})") from None
+    return record_trial
+
+
+def _distinct(outputs: dict) -> None:
+    """Two outputs may not be the same file (the second would overwrite the first)."""
+    seen = {}
+    for flag, path in outputs.items():
+        key = os.path.realpath(path)
+        if key in seen:
+            raise SlopewalkError(f"{flag} {str(path)!r}: is the same file as {seen[key]}")
+        seen[key] = flag
+
+
+def optimize(args) -> None:
+    from bench.experiments.ga import GaSettings, pareto_figure
+    from bench.experiments.ga_case import (
+        optimize_case,
+        pareto_csv,
+        pareto_paths,
+        pareto_title,
+        summary_lines,
+    )
+    from planner.spec import load_spec
+
+    outputs = [args.out, *(pareto_paths(args.out) if args.pareto else ())]
+    check_output(args.out)
+    for path in outputs[1:]:
+        check_output(path, name="--pareto output")
+    settings = GaSettings(
+        population=args.population,
+        generations=args.generations,
+        seed=args.seed,
+        constraint=args.constraint,
+    )
+    spec = load_spec(args.robot)
+    if args.foot_length is not None:
+        allowed = spec.foot_length_range(args.foot_extend)
+        if not allowed.contains(args.foot_length):
+            raise SlopewalkError(
+                f"--foot-length {args.foot_length:g} m: {allowed.requirement} with "
+                f"--foot-extend {args.foot_extend} (the ankle must stay over the foot)"
+            )
+        spec = spec.with_foot_length(args.foot_length, extend=args.foot_extend)
+    case = optimize_case(
+        spec,
+        slope=np.deg2rad(args.slope),
+        step_time=args.step_time,
+        settings=settings,
+        friction=args.friction,
+        pareto=args.pareto,
+        progress=sys.stderr.isatty(),
+    )
+    with atomic_paths(*outputs) as tmps:
+        if case.front is not None:
+            csv_path, png_path = outputs[1:]
+            tmps[1].write_text(pareto_csv(case.front))
+            figure = pareto_figure(case.front, pareto_title(case.report))
+            figure.savefig(tmps[2], format="png", dpi=120)
+            case.report["pareto"].update(csv=csv_path.name, png=png_path.name)
+        tmps[0].write_text(json.dumps(case.report, indent=2) + "\n")
+    print("\n".join(summary_lines(case.report)))
+    print("wrote " + ", ".join(str(p) for p in outputs))
+
+
+def compare(args) -> None:
+    from bench.experiments import compare as comparison
+    from planner.spec import load_spec
+
+    outputs = {"--out": args.out}
+    if args.write_baseline:
+        outputs["--baseline"] = args.baseline
+    _distinct(outputs)
+    for flag, path in outputs.items():
+        check_output(path, name=flag)
+    # A missing, empty or malformed baseline is refused before the five trials run.
+    baseline = None if args.write_baseline else comparison.load_baseline(args.baseline)
+    rows = comparison.run_comparison(load_spec())
+    problems = comparison.check(rows, baseline)
+    text = comparison.report(rows, baseline, problems)
+    with atomic_paths(*outputs.values()) as tmps:
+        tmps[0].write_text(text)
+        if args.write_baseline:
+            tmps[1].write_text(json.dumps(rows, indent=2) + "\n")
+    print(text, end="")
+    if args.write_baseline:
+        print(f"wrote the new baseline {args.baseline}")
+    if problems:
+        raise SystemExit(1)
+
+
+def sweep(args) -> None:
+    from pathlib import Path
+
+    from bench.experiments.sweep import open_executor, run_sweep
+    from bench.experiments.sweep_config import SweepError, load_sweep
+
+    config = load_sweep(args.config)  # the whole file is checked before anything runs
+    if args.record:
+        try:
+            import bench.report.recording  # noqa: F401
+        except ImportError as err:
+            raise SweepError(f"--record: recordings are unavailable ({err})") from None
+    out = Path(args.out) if args.out is not None else Path.cwd() / "results"
+    check_output_dir(out)  # before any trial runs
+    with open_executor(workers=args.workers, cluster=args.cluster) as executor:
+        summary = run_sweep(
+            config, out, executor=executor, record=args.record, progress=sys.stderr.isatty()
+        )
+    print("\n".join(summary.lines()))
+    if summary.lost:
+        raise SweepError(f"{len(summary.lost)} trials lost with their workers; re-run to resume")
+    if args.config is None or args.report:
+        from bench.experiments.sweep_table import read_table
+        from bench.report.claims import ga_claims, write_report
+        from planner.spec import load_spec
+
+        spec = load_spec()
+        written = write_report(
+            out, read_table(summary.table), spec, ga_claims(out / "optimize", spec)
+        )
+        print("wrote " + ", ".join(str(p.name) for p in written))
+
+
+def benchmark(args) -> None:
+    from bench.experiments import benchmark as benchmarks
+
+    for name, value in benchmarks.run(args.what).items():
+        print(f"{name}: {value:.6g}" if isinstance(value, float) else f"{name}: {value}")

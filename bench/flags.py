@@ -1,0 +1,155 @@
+"""The ``slopewalk`` command's flags: types that check ranges while parsing, shared groups.
+
+A number flag is parsed by ``number(range)``/``integer(range)``, which refuse a
+value outside the range (NaN and ±inf included) with argparse's one line,
+``argument --step-time: inf: must lie in (0, 60] s``. The ranges are
+``planner.ranges``'s, the same the dataclasses check through the API.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from planner import ranges
+from planner.ranges import Range
+
+ACTUATOR_MODES = ("stiff", "servo")  # bench.sim.model's (a test keeps them equal)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+class Formatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the examples' layout and appends each option's default to its help."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (
+            "%(default)" in text
+            or not action.option_strings
+            or action.default in (None, False, argparse.SUPPRESS)
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+DOCS = (
+    "Formats: robot spec TOML in docs/robot-spec.md, sweep TOML in docs/sweep-format.md;\n"
+    "every flag in the README's 'Command line' section."
+)
+FINITE = Range(-math.inf, math.inf)
+POPULATION = Range(2, 10_000, integer=True, low_open=False)  # GaSettings asks >= 2
+GENERATIONS = Range(1, 100_000, integer=True, low_open=False)
+SEED = Range(0, 2**32 - 1, integer=True, low_open=False)
+WORKERS = Range(1, 1024, integer=True, low_open=False)
+
+
+def number(allowed: Range = FINITE):
+    """An argparse type: a float inside ``allowed`` (NaN and ±inf never are)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not allowed.contains(value):
+            raise argparse.ArgumentTypeError(f"{text}: {allowed.requirement}")
+        return value
+
+    return parse
+
+
+def integer(allowed: Range):
+    """An argparse type: an integer inside ``allowed``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+        if not allowed.contains(value):
+            raise argparse.ArgumentTypeError(f"{text}: {allowed.requirement}")
+        return value
+
+    return parse
+
+
+def add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = True) -> None:
+    p.add_argument(
+        "--step-time",
+        type=number(ranges.STEP_TIME),
+        required=step_time_required,
+        metavar="S",
+        help=f"step completion time t_c [s], in {ranges.STEP_TIME}",
+    )
+    p.add_argument(
+        "--slope",
+        type=number(ranges.SLOPE_DEG),
+        default=0.0,
+        metavar="DEG",
+        help=f"plane inclination [deg], in {ranges.SLOPE_DEG}; positive walks uphill",
+    )
+    add_robot_flag(p)
+    p.add_argument(
+        "--hip-height",
+        type=number(),
+        metavar="M",
+        help="pelvis-centre height above the plane Hz [m], in (0, ankle height + leg] "
+        "(default ankle height + 0.757 x (thigh + shank): 0.20 for the paper's biped)",
+    )
+    p.add_argument(
+        "--swing-lift",
+        type=number(),
+        metavar="M",
+        help="peak swing-foot lift Szmax [m], in [0, Hz - ankle height) (default 0.6 x thigh)",
+    )
+    p.add_argument(
+        "--tilt",
+        type=number(ranges.TILT_DEG),
+        metavar="DEG",
+        help=f"peak frontal lean towards the stance foot [deg], in {ranges.TILT_DEG} "
+        "(default: the nominal gait's)",
+    )
+    p.add_argument(
+        "--tilt-profile",
+        choices=("hold", "sway"),
+        default="hold",
+        help="lean shape: cubic transfer in DSP and hold, or sway",
+    )
+    p.add_argument(
+        "--steps",
+        type=integer(ranges.STEPS),
+        default=4,
+        metavar="N",
+        help=f"number of steps, an integer in {ranges.STEPS}; the walk may have at most "
+        f"{ranges.MAX_SAMPLES:.0e} plan samples (steps x step time / 1 ms)",
+    )
+
+
+def add_robot_flag(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="robot spec TOML, see docs/robot-spec.md (default: the paper's biped)",
+    )
+
+
+def add_sim_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--friction",
+        type=number(ranges.FRICTION),
+        default=1.0,
+        metavar="MU",
+        help=f"Coulomb friction of feet on the plane, in {ranges.FRICTION}",
+    )
+    p.add_argument(
+        "--actuators",
+        choices=ACTUATOR_MODES,
+        default="stiff",
+        help="stiff: tracks the plan closely; servo: AX-12A-like gains and torque limit",
+    )

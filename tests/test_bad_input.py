@@ -1,0 +1,359 @@
+"""Bad input at the command line: one line naming the value and the range, nothing left behind.
+
+Each row of ``CASES`` is (argv, fragment). ``{out}`` is an empty folder that must
+stay empty, ``{in}`` a folder of prepared inputs that must stay as it was; the
+command runs in-process (``bench.cli.main``) from a working directory that must
+gain nothing (no ``MUJOCO_LOG.TXT`` either). A few end-to-end runs at the bottom
+go through a real process.
+"""
+
+import json
+import math
+import os
+import stat
+import subprocess
+import sys
+
+import pytest
+
+from bench.cli import main
+from planner.spec import default_spec_path
+
+SPEC = default_spec_path().read_text()
+
+
+def _spec(old: str, new: str, count: int = 1) -> str:
+    assert old in SPEC, old
+    return SPEC.replace(old, new, count)
+
+
+THIGH_INERTIA = "inertia = [8.150e-5, 7.450e-5, 2.050e-5]"
+INPUTS = {  # file name in {in} -> content
+    "nan_com.toml": _spec("com = [0.0, 0.0, -0.070]", "com = [nan, 0.0, -0.070]"),
+    "inf_com.toml": _spec("com = [0.0, 0.0, -0.070]", "com = [0.0, 0.0, -inf]"),
+    "huge_com.toml": _spec("com = [0.0, 0.0, -0.070]", "com = [0.0, 0.0, -70.0]"),
+    "nan_inertia.toml": _spec(THIGH_INERTIA, "inertia = [8.150e-5, nan, 2.050e-5]"),
+    "inf_inertia.toml": _spec(THIGH_INERTIA, "inertia = [inf, 7.450e-5, 2.050e-5]"),
+    "neg_inertia.toml": _spec(THIGH_INERTIA, "inertia = [8.150e-5, -7.450e-5, 2.050e-5]"),
+    "triangle.toml": _spec(THIGH_INERTIA, "inertia = [1e-5, 1e-5, 1e-3]"),
+    "short_inertia.toml": _spec(THIGH_INERTIA, "inertia = [1e-5, 1e-5]"),
+    "nan_mass.toml": _spec("mass = 0.066", "mass = nan"),
+    "neg_mass.toml": _spec("mass = 0.066", "mass = -0.066"),
+    "huge_mass.toml": _spec("mass = 0.066", "mass = 1e9"),
+    "string_mass.toml": _spec("mass = 0.066", 'mass = "66 g"'),
+    "bool_mass.toml": _spec("mass = 0.066", "mass = true"),
+    "nan_length.toml": _spec("thigh = 0.111", "thigh = nan"),
+    "inf_length.toml": _spec("shank = 0.111", "shank = inf"),
+    "neg_length.toml": _spec("hip_width = 0.085", "hip_width = -0.085"),
+    "huge_length.toml": _spec("foot_width = 0.060", "foot_width = 1e9"),
+    "string_length.toml": _spec("thigh = 0.111", 'thigh = "0.111"'),
+    "nan_stall.toml": _spec("stall_torque = 1.5", "stall_torque = nan"),
+    "inf_stall.toml": _spec("stall_torque = 1.5", "stall_torque = inf"),
+    "neg_stall.toml": _spec("stall_torque = 1.5", "stall_torque = -1.5"),
+    "nan_limit.toml": _spec("knee = [-0.10, 2.60]", "knee = [-0.10, nan]"),
+    "unknown_key.toml": _spec("stall_torque = 1.5", "stall_toque = 1.5"),
+    "unknown_table.toml": SPEC + "\n[arms]\nmass = 0.1\n",
+    "unknown_link.toml": _spec("[links.ankle]", "[links.ankel]"),
+    "not_toml.toml": "thigh = = 0.1\n",
+    "binary.toml": bytes(range(256)) * 16,
+    "latin1.toml": "name = 'caf\xe9'\n".encode("latin-1"),
+    "empty.json": "",
+    "empty_list.json": "[]",
+    "broken.json": "[{",
+    "a_file": "not a folder\n",
+}
+
+PLAN = ["plan", "--step-time", "1"]
+ROBOT = [*PLAN, "--robot"]
+DEFAULT_OUT = {  # an --out is added where a row has none
+    "plan": "{out}/p.npz",
+    "trial": "{out}/t.json",
+    "mjcf": "{out}/s.xml",
+    "optimize": "{out}/b.json",
+    "compare": "{out}/c.md",
+    "sweep": "{out}",
+}
+CASES = [
+    # numbers at the command line
+    (["plan", "--step-time", "inf"], "--step-time: inf: must lie in (0, 60] s"),
+    (["plan", "--step-time=-inf"], "--step-time: -inf: must lie in"),
+    (["plan", "--step-time", "nan"], "--step-time: nan: must lie in"),
+    (["plan", "--step-time", "1e5"], "--step-time: 1e5: must lie in (0, 60] s"),
+    (["plan", "--step-time", "0"], "--step-time: 0: must lie in (0, 60] s"),
+    (["plan", "--step-time", "-1"], "--step-time: -1: must lie in"),
+    (["plan", "--step-time", "0.005"], "step time 0.005 s: must lie in [0.01, 60] s"),
+    (["plan", "--step-time", "abc"], "--step-time: 'abc' is not a number"),
+    ([*PLAN, "--steps", "100000"], "--steps: 100000: must be an integer in [1, 1000]"),
+    ([*PLAN, "--steps", "0"], "--steps: 0: must be an integer in [1, 1000]"),
+    ([*PLAN, "--steps", "2.5"], "--steps: '2.5' is not an integer"),
+    (["plan", "--step-time", "50", "--steps", "900"], "4.5e+07 samples: must be <= 1e+06"),
+    ([*PLAN, "--slope", "60"], "--slope: 60: must lie in (-60, 60) deg"),
+    ([*PLAN, "--slope", "-75"], "--slope: -75: must lie in (-60, 60) deg"),
+    ([*PLAN, "--slope", "nan"], "--slope: nan: must lie in"),
+    ([*PLAN, "--hip-height", "nan"], "--hip-height: nan: must be a finite number"),
+    ([*PLAN, "--hip-height", "0.5"], "hip height 0.5 m: must lie in (0, 0.254] m"),
+    ([*PLAN, "--hip-height", "-0.1"], "hip height -0.1 m: must be a finite length > 0 m"),
+    ([*PLAN, "--hip-height", "0.25"], "unreachable hip target at t ="),
+    ([*PLAN, "--swing-lift", "inf"], "--swing-lift: inf: must be a finite number"),
+    ([*PLAN, "--swing-lift", "0.2"], "swing lift 0.2 m: must lie in [0, 0.168) m"),
+    ([*PLAN, "--swing-lift", "-0.01"], "swing lift -0.01 m: must be a finite length >= 0 m"),
+    ([*PLAN, "--tilt", "50"], "--tilt: 50: must lie in (-45, 45) deg"),
+    ([*PLAN, "--tilt-profile", "wobble"], "invalid choice: 'wobble'"),
+    (["trial", "--step-time", "1", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
+    (["trial", "--step-time", "1", "--friction", "1e6"], "--friction: 1e6: must lie in (0, 10]"),
+    (["trial", "--step-time", "1", "--friction", "0"], "--friction: 0: must lie in (0, 10]"),
+    (["trial", "--step-time", "1", "--friction", "-2"], "--friction: -2: must lie in (0, 10]"),
+    (["trial", "--step-time", "1", "--friction", "nan"], "--friction: nan: must lie in (0, 10]"),
+    (["trial", "--step-time", "1", "--friction", "grippy"], "--friction: 'grippy' is not a number"),
+    (["trial", "--step-time", "1", "--slope", "61"], "--slope: 61: must lie in (-60, 60) deg"),
+    (["trial", "--step-time", "1", "--actuators", "soft"], "--actuators: invalid choice: 'soft'"),
+    (["mjcf", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
+    (["mjcf", "--slope", "-60"], "--slope: -60: must lie in (-60, 60) deg"),
+    (["mjcf", "--actuators", "hydraulic"], "invalid choice: 'hydraulic'"),
+    (
+        ["optimize", "--slope", "10", "--foot-length", "0.03"],
+        "--foot-length 0.03 m: must lie in (0.051, 5] m with --foot-extend toe",
+    ),
+    (
+        ["optimize", "--slope", "10", "--foot-length", "0.04", "--foot-extend", "heel"],
+        "--foot-length 0.04 m: must lie in (0.049, 5] m with --foot-extend heel",
+    ),
+    (
+        ["optimize", "--slope", "10", "--foot-length", "nan"],
+        "--foot-length: nan: must be a finite number",
+    ),
+    (
+        ["optimize", "--slope", "10", "--population", "1"],
+        "--population: 1: must be an integer in [2, 10000]",
+    ),
+    (
+        ["optimize", "--slope", "10", "--generations", "1e9"],
+        "--generations: '1e9' is not an integer",
+    ),
+    (["optimize", "--slope", "10", "--seed", "-1"], "--seed: -1: must be an integer in"),
+    (["optimize", "--slope", "inf"], "--slope: inf: must lie in (-60, 60) deg"),
+    (
+        ["sweep", "--workers", "0", "--out", "{out}"],
+        "--workers: 0: must be an integer in [1, 1024]",
+    ),
+    # robot spec files
+    ([*ROBOT, "{in}/nan_com.toml"], "links.thigh.com nan m: must lie in [-5, 5] m"),
+    ([*ROBOT, "{in}/inf_com.toml"], "links.thigh.com -inf m: must lie in [-5, 5] m"),
+    ([*ROBOT, "{in}/huge_com.toml"], "links.thigh.com -70.0 m: must lie in [-5, 5] m"),
+    ([*ROBOT, "{in}/nan_inertia.toml"], "links.thigh.inertia nan kg m^2: must be a finite number"),
+    ([*ROBOT, "{in}/inf_inertia.toml"], "links.thigh.inertia inf kg m^2: must be a finite number"),
+    ([*ROBOT, "{in}/neg_inertia.toml"], "must be > 0 (positive definite)"),
+    ([*ROBOT, "{in}/triangle.toml"], "violates the triangle inequality"),
+    (
+        [*ROBOT, "{in}/short_inertia.toml"],
+        "links.thigh.inertia [1e-05, 1e-05]: must be a list of 3 numbers",
+    ),
+    ([*ROBOT, "{in}/nan_mass.toml"], "links.thigh.mass nan kg: must lie in (0, 1000] kg"),
+    ([*ROBOT, "{in}/neg_mass.toml"], "links.thigh.mass -0.066 kg: must lie in (0, 1000] kg"),
+    ([*ROBOT, "{in}/huge_mass.toml"], "links.thigh.mass 1000000000.0 kg: must lie in (0, 1000] kg"),
+    ([*ROBOT, "{in}/string_mass.toml"], "links.thigh.mass '66 g': must lie in (0, 1000] kg"),
+    ([*ROBOT, "{in}/bool_mass.toml"], "links.thigh.mass True: must lie in"),
+    ([*ROBOT, "{in}/nan_length.toml"], "geometry.thigh nan m: must lie in (0, 5] m"),
+    ([*ROBOT, "{in}/inf_length.toml"], "geometry.shank inf m: must lie in (0, 5] m"),
+    ([*ROBOT, "{in}/neg_length.toml"], "geometry.hip_width -0.085 m: must lie in (0, 5] m"),
+    ([*ROBOT, "{in}/huge_length.toml"], "geometry.foot_width 1000000000.0 m: must lie in (0, 5] m"),
+    ([*ROBOT, "{in}/string_length.toml"], "geometry.thigh '0.111': must lie in (0, 5] m"),
+    ([*ROBOT, "{in}/nan_stall.toml"], "servo.stall_torque nan N m: must lie in (0, 10000] N m"),
+    ([*ROBOT, "{in}/inf_stall.toml"], "servo.stall_torque inf N m: must lie in (0, 10000] N m"),
+    ([*ROBOT, "{in}/neg_stall.toml"], "servo.stall_torque -1.5 N m"),
+    ([*ROBOT, "{in}/nan_limit.toml"], "joint_limits.knee nan rad: must lie in"),
+    (
+        [*ROBOT, "{in}/unknown_key.toml"],
+        "unknown key servo.stall_toque (did you mean servo.stall_torque?",
+    ),
+    ([*ROBOT, "{in}/unknown_table.toml"], "unknown key arms (known: name, geometry"),
+    ([*ROBOT, "{in}/unknown_link.toml"], "unknown key links.ankel (did you mean links.ankle?"),
+    ([*ROBOT, "{in}/not_toml.toml"], "not_toml.toml': not valid TOML (Invalid value"),
+    ([*ROBOT, "{in}/binary.toml"], "binary.toml': not UTF-8 text (byte 0x80 at offset 128)"),
+    (["mjcf", "--robot", "{in}/latin1.toml"], "latin1.toml': not UTF-8 text (byte 0xe9"),
+    ([*ROBOT, "{in}"], "': is a directory, not a TOML file"),
+    ([*ROBOT, "{in}/missing.toml"], "missing.toml': no such file"),
+    ([*ROBOT, ""], "robot spec '.': is a directory"),
+    # output paths, checked before any work
+    ([*PLAN, "--out", "{out}"], "--out '{out}': is a directory; give a file path"),
+    ([*PLAN, "--out", ""], "--out '': must be a file path, not empty"),
+    ([*PLAN, "--out", "{in}/a_file/p.npz"], "a_file' is a regular file, not a folder"),
+    ([*PLAN, "--out", "{in}/a_file/deeper/p.npz"], "a_file' is a regular file, not a folder"),
+    (
+        [*PLAN, "--out", "/proc/slopewalk.npz"],
+        "--out '/proc/slopewalk.npz': cannot create files in '/proc'",
+    ),
+    ([*PLAN, "--out", "/proc/version"], "--out '/proc/version': cannot create files in '/proc'"),
+    (
+        ["trial", "--step-time", "1", "--out", "{out}/t.json", "--series", "{out}"],
+        "--series '{out}': is a directory",
+    ),
+    (
+        ["trial", "--step-time", "1", "--out", "{out}/t.json", "--record", "{out}"],
+        "--record '{out}': is a directory",
+    ),
+    (
+        ["trial", "--step-time", "1", "--out", "{out}/t.json", "--series", "{out}/t.json"],
+        "--series '{out}/t.json': is the same file as --out",
+    ),
+    (["optimize", "--slope", "10", "--pareto", "--out", "{out}"], "--out '{out}': is a directory"),
+    (
+        ["optimize", "--slope", "10", "--pareto", "--out", "{in}/a_file/b.json"],
+        "a_file' is a regular file",
+    ),
+    (["compare", "--out", "{out}"], "--out '{out}': is a directory"),
+    (["compare", "--write-baseline", "--baseline", "{out}"], "--baseline '{out}': is a directory"),
+    (["sweep", "--out", "{in}/a_file"], "--out '{in}/a_file': is a regular file, not a folder"),
+    (
+        ["sweep", "--out", "/proc/slopewalk"],
+        "--out '/proc/slopewalk': cannot create files in '/proc'",
+    ),
+    # the comparison's baseline
+    (["compare", "--baseline", "/nonexistent.json"], "baseline '/nonexistent.json': no such file"),
+    (["compare", "--baseline", "{in}/empty.json"], "empty.json': is empty"),
+    (
+        ["compare", "--baseline", "{in}/empty_list.json"],
+        "empty_list.json': must be a non-empty list",
+    ),
+    (["compare", "--baseline", "{in}/broken.json"], "broken.json': not valid JSON"),
+    (["compare", "--baseline", "{in}"], "': is a directory, not a JSON file"),
+    (["compare", "--baseline", "{in}/binary.toml"], "binary.toml': not UTF-8 text"),
+]
+
+
+@pytest.fixture
+def dirs(tmp_path, monkeypatch):
+    inputs, out = tmp_path / "in", tmp_path / "out"
+    inputs.mkdir()
+    out.mkdir()
+    for name, content in INPUTS.items():
+        path = inputs / name
+        path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    monkeypatch.chdir(tmp_path)
+    return tmp_path, inputs, out
+
+
+def _snapshot(root):
+    return sorted(
+        (str(p.relative_to(root)), p.stat().st_size if p.is_file() else -1) for p in root.rglob("*")
+    )
+
+
+def _fill(text: str, inputs, out) -> str:
+    return text.replace("{in}", str(inputs)).replace("{out}", str(out))
+
+
+def _refused(argv, capsys):
+    try:
+        code = main(argv)
+    except SystemExit as exit_:
+        code = exit_.code
+    captured = capsys.readouterr()
+    return code, captured.err, captured.out
+
+
+@pytest.mark.parametrize("argv, fragment", CASES, ids=[" ".join(a) for a, _ in CASES])
+def test_bad_input_is_one_line_and_leaves_nothing(argv, fragment, dirs, capsys):
+    root, inputs, out = dirs
+    before = _snapshot(root)
+    if "--out" not in argv:
+        argv = [*argv, "--out", DEFAULT_OUT[argv[0]]]
+    code, err, _ = _refused([_fill(a, inputs, out) for a in argv], capsys)
+    assert code not in (0, None), err
+    assert _fill(fragment, inputs, out) in err, err
+    assert err.endswith("\n") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    assert list(out.iterdir()) == []  # nothing half-written
+    assert _snapshot(root) == before  # nor any other file, MUJOCO_LOG.TXT included
+
+
+def test_the_table_covers_every_prepared_input():
+    used = " ".join(" ".join(a) for a, _ in CASES)
+    assert [name for name in INPUTS if f"{{in}}/{name}" not in used] == []
+
+
+def test_no_arguments_prints_the_usage_and_fails(capsys):
+    code, err, _ = _refused([], capsys)
+    assert code == 2
+    assert err.startswith("usage: slopewalk") and "plan" in err and "examples:" in err
+
+
+def test_every_subcommand_describes_itself_with_an_example(capsys):
+    from bench.cli import build_parser
+
+    commands = build_parser()._subparsers._group_actions[0].choices
+    for name, parser in commands.items():
+        text = parser.format_help()
+        assert parser.description, name
+        assert f"slopewalk {name}" in parser.epilog, name
+        assert "docs/robot-spec.md" in text and "docs/sweep-format.md" in text, name
+    trial = commands["trial"].format_help()
+    assert "{stiff,servo}" in trial and "(default: stiff)" in trial
+    assert "(default: 1.0)" in trial  # --friction
+    assert "(default: 4)" in trial  # --steps
+
+
+def test_the_cli_offers_the_scenes_actuator_modes():
+    from bench import flags
+    from bench.sim.model import ACTUATOR_MODES
+
+    assert flags.ACTUATOR_MODES == ACTUATOR_MODES
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_full_device_is_written_through_and_never_replaced(dirs, capsys):
+    code, err, _ = _refused(["mjcf", "--out", "/dev/full"], capsys)
+    assert code == 2
+    assert err == "slopewalk: error: cannot write '/dev/full': No space left on device\n"
+    assert stat.S_ISCHR(os.stat("/dev/full").st_mode)  # still the device
+    code, err, out = _refused(["mjcf", "--out", os.devnull], capsys)
+    assert code == 0, err
+    assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
+
+
+def _cli(*args, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "bench.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+    )
+
+
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["plan", "--step-time", "inf", "--out", "p.npz"], "--step-time: inf: must lie in"),
+        (["compare", "--baseline", "/nonexistent.json"], "/nonexistent.json': no such file"),
+        (["mjcf", "--out", "/dev/full"], "'/dev/full': No space left on device"),
+    ],
+)
+def test_bad_input_end_to_end(argv, fragment, tmp_path):
+    if "/dev/full" in argv and not os.path.exists("/dev/full"):
+        pytest.skip("needs /dev/full")
+    result = _cli(*argv, cwd=tmp_path)
+    assert result.returncode == 2
+    assert fragment in result.stderr
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert result.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_no_arguments_end_to_end(tmp_path):
+    result = _cli(cwd=tmp_path)
+    assert result.returncode == 2
+    assert result.stderr.startswith("usage: slopewalk")
+
+
+def test_a_trial_writes_strict_json_a_series_and_a_recording(tmp_path):
+    out, series, record = tmp_path / "t.json", tmp_path / "t.npz", tmp_path / "t.rrd"
+    result = _cli(
+        "trial", "--step-time", "1", "--steps", "1", "--out", str(out), "--series",
+        str(series), "--record", str(record), cwd=tmp_path,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    json.loads(out.read_text(), parse_constant=pytest.fail)  # no NaN or Infinity
+    assert record.stat().st_size > 0 and record.read_bytes()[:4] == b"RRF2"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "t.npz", "t.rrd"]
+    assert math.isfinite(json.loads(out.read_text())["zmp_rms"])
