@@ -131,29 +131,31 @@ class GaitParams:
     def check_fits(self, spec) -> None:
         """Refuse lengths that no pose of ``spec`` can reach, before any computing.
 
-        Hz cannot exceed the straight leg on its ankle (ankle height + thigh + shank),
-        the swing sole cannot rise above the ankle being at the hip
-        (Szmax < Hz - ankle height), and a step cannot be longer than both legs.
-        Nearer targets that are still out of reach are found by the IK at their time.
+        Necessary conditions only, each a vertical distance no leg can span: Hz
+        cannot exceed the straight stance leg on its ankle (ankle height + thigh +
+        shank), the swing ankle (Szmax + ankle height) cannot be farther than a leg
+        from the hip, and a step cannot be longer than both legs. Targets that
+        pass and are still out of reach are found by the IK, at their time.
 
         Raises:
             GaitError: naming the value and the range the robot allows.
         """
-        top = spec.ankle_height + spec.leg_reach
+        reach = spec.leg_reach
+        top = spec.ankle_height + reach
         _check(
             self.hip_height <= top,
             f"hip height {self.hip_height:g} m: must lie in (0, {top:.4g}] m for "
             f"{spec.name} (ankle height + thigh + shank)",
         )
-        lift = self.hip_height - spec.ankle_height
+        lift = self.hip_height - spec.ankle_height + reach
         _check(
             self.swing_lift < lift,
             f"swing lift {self.swing_lift:g} m: must lie in [0, {lift:.4g}) m for {spec.name} "
-            f"at hip height {self.hip_height:g} m (hip height - ankle height)",
+            f"at hip height {self.hip_height:g} m (hip height - ankle height + thigh + shank)",
         )
         _check(
-            self.step_length <= 2 * spec.leg_reach,
-            f"step length {self.step_length:g} m: must lie in (0, {2 * spec.leg_reach:.4g}] m "
+            self.step_length <= 2 * reach,
+            f"step length {self.step_length:g} m: must lie in (0, {2 * reach:.4g}] m "
             f"for {spec.name} (two legs)",
         )
 
@@ -171,9 +173,7 @@ class GaitParams:
             "swing_lift": NOMINAL_LIFT_PER_THIGH * spec.thigh,
         }
         base.update(overrides)
-        gait = cls(step_time=step_time, **base)
-        gait.check_fits(spec)
-        return gait
+        return cls(step_time=step_time, **base)
 
 
 def _check(ok: bool, message: str) -> None:
