@@ -40,7 +40,12 @@ class Range:
     def __str__(self) -> str:
         left = "(" if self.low_open else "["
         right = ")" if self.high_open else "]"
-        return f"{left}{self.low:g}, {self.high:g}{right}{self._unit}"
+        low, high = (
+            (f"{int(self.low)}", f"{int(self.high)}")
+            if self.integer
+            else (f"{self.low:g}", f"{self.high:g}")
+        )
+        return f"{left}{low}, {high}{right}{self._unit}"
 
     @property
     def _unit(self) -> str:

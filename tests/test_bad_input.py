@@ -130,7 +130,10 @@ CASES = [
         ["optimize", "--slope", "10", "--generations", "1e9"],
         "--generations: '1e9' is not an integer",
     ),
-    (["optimize", "--slope", "10", "--seed", "-1"], "--seed: -1: must be an integer in"),
+    (
+        ["optimize", "--slope", "10", "--seed", "-1"],
+        "--seed: -1: must be an integer in [0, 4294967295]",
+    ),
     (["optimize", "--slope", "inf"], "--slope: inf: must lie in (-60, 60) deg"),
     (
         ["sweep", "--workers", "0", "--out", "{out}"],
