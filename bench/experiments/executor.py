@@ -1,0 +1,406 @@
+"""Run many independent jobs in parallel, one at a time per worker, surviving kills and crashes.
+
+The generic half of a sweep (``sweep.py``) and of any other long batch of
+trials: this module knows nothing of trials or tables. A job is a key (a
+string) and the arguments of one call of a top-level function ``fn``; results
+come back as ``(key, result)`` pairs in the order they finish, from jobs taken
+lazily from an iterable (a million-job grid is never held as a list).
+
+Two ways to run them:
+
+- ``LocalPool``: worker processes started with ``spawn`` (a fresh interpreter:
+  they inherit no file descriptor, so never the lock of a results table, which
+  an ``flock`` shares with every process that holds the same open file). Each
+  worker is given one job at a time over its own pipe, so when a worker dies
+  (a segfault in a native library, ``os._exit``, the OOM killer, ``kill -9``)
+  the pool knows which job it held: that job comes back as a ``Lost`` with the
+  cause ("worker died: signal 9 (SIGKILL)"), a fresh worker takes its place and
+  the other jobs go on. Workers die with the main process: Linux's
+  ``PR_SET_PDEATHSIG`` (set through ``ctypes``) kills a worker with SIGKILL
+  when its parent exits, and a thread in each worker that watches its parent
+  pid is the fallback elsewhere. Workers ignore SIGINT: Ctrl-C reaches the
+  whole process group, and the main process decides.
+- ``FuturesPool``: any ``concurrent.futures.Executor``, e.g. a Dask
+  ``distributed.Client``'s; at most ``window`` jobs are submitted at a time.
+  An executor cannot say which job a lost worker held, so a failed future
+  comes back as a ``Lost`` with ``known=False``: the caller should not blame
+  the job for it.
+
+``interruptible()`` turns SIGTERM (and SIGINT) into an ``Interrupted``
+exception in the main thread, so a terminated run stops like a Ctrl-C one:
+the caller keeps what it has written and exits non-zero with one line.
+``Progress`` is the progress display of the house: a tqdm bar on a terminal,
+a plain line at every tenth otherwise, quiet in tests.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import itertools
+import multiprocessing
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Executor
+from concurrent.futures import wait as wait_futures
+from dataclasses import dataclass
+from multiprocessing.connection import wait as wait_ready
+
+from planner.errors import SlopewalkError
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fallback)
+WAIT_S = 0.5  # [s] longest wait of the main loop before it looks again
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+MAX_FAILED_STARTS = 3  # workers in a row that die before they are ready: the pool gives up
+
+
+class ExecutorError(SlopewalkError):
+    """The pool itself failed (e.g. a worker could not start); no job is to blame."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was asked to stop by a signal (SIGINT or SIGTERM)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+@dataclass(frozen=True)
+class Lost:
+    """A job that returned nothing: its worker died, or the executor lost it.
+
+    Attributes:
+        cause: One line, e.g. "worker died: signal 9 (SIGKILL)".
+        known: True when the job was certainly the one its dead worker held
+            (``LocalPool``); False when an executor reported a failure that
+            may have nothing to do with the job (``FuturesPool``).
+    """
+
+    cause: str
+    known: bool = True
+
+
+def one_line(err: BaseException) -> str:
+    """An exception as one line: its type and message (the message alone for our errors)."""
+    text = " ".join(str(err).split())
+    if isinstance(err, SlopewalkError):
+        return text
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+_stop = {"defer": 0, "pending": None}  # see _deferred_stop
+
+
+@contextlib.contextmanager
+def interruptible() -> Iterator[None]:
+    """Within the block, SIGTERM and SIGINT raise ``Interrupted`` in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, _frame):
+        if _stop["defer"]:
+            _stop["pending"] = signum
+            return
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+@contextlib.contextmanager
+def _deferred_stop() -> Iterator[None]:
+    """A stop signal in the block raises ``Interrupted`` only when the block is done."""
+    _stop["defer"] += 1
+    try:
+        yield
+    finally:
+        _stop["defer"] -= 1
+    pending, _stop["pending"] = _stop["pending"], None
+    if pending is not None and not _stop["defer"]:
+        raise Interrupted(pending)
+
+
+def death_cause(exitcode: int | None) -> str:
+    """Why a worker process ended, from its ``exitcode`` (negative: killed by that signal)."""
+    if exitcode is None:
+        return "worker died"
+    if exitcode < 0:
+        try:
+            name = signal.Signals(-exitcode).name
+        except ValueError:
+            name = "unknown signal"
+        return f"worker died: signal {-exitcode} ({name})"
+    return f"worker died: exit code {exitcode}"
+
+
+# --- the worker side ------------------------------------------------------------------------------
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Make this process end when ``parent_pid`` does: PR_SET_PDEATHSIG, and a watching thread."""
+    with contextlib.suppress(Exception):  # not Linux, or no libc: the thread below still watches
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(1)
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="parent-watch").start()
+
+
+def _worker_main(conn, fn: Callable, parent_pid: int) -> None:
+    """A worker: say ready, then run one job per message until told to stop or orphaned."""
+    _die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        conn.send(("ready", None, None))
+        while (message := conn.recv()) is not None:
+            key, args = message
+            try:
+                reply = (key, True, fn(*args))
+            except Exception as err:  # fn should not raise; if it does, the job says why
+                reply = (key, False, one_line(err))
+            try:
+                conn.send(reply)
+            except (pickle.PicklingError, TypeError, AttributeError) as err:
+                conn.send((key, False, f"result not sent: {one_line(err)}"))
+    except (EOFError, OSError):  # the main process is gone or closed the pipe: nothing to say
+        os._exit(0)
+
+
+# --- the main side --------------------------------------------------------------------------------
+
+
+class _Worker:
+    def __init__(self, context, fn: Callable):
+        ours, theirs = context.Pipe(duplex=True)
+        self.conn = ours
+        self.process = context.Process(
+            target=_worker_main, args=(theirs, fn, os.getpid()), daemon=True
+        )
+        self.process.start()
+        theirs.close()
+        self.ready = False
+        self.job: tuple[str, tuple] | None = None
+
+    def stop(self) -> None:
+        with contextlib.suppress(Exception):
+            self.process.kill()
+        with contextlib.suppress(Exception):
+            self.process.join(5)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+
+
+class LocalPool:
+    """``workers`` spawned processes, one job at a time each (module doc).
+
+    Use as a context manager; leaving it kills the workers at once.
+    """
+
+    def __init__(self, fn: Callable, *, workers: int | None = None):
+        """
+        Args:
+            fn: A top-level function (picklable by reference); called as ``fn(*args)``.
+            workers: Worker processes (default ``os.cpu_count()``), >= 1.
+        """
+        self.fn = fn
+        self.workers = workers or os.cpu_count() or 1
+        if self.workers < 1:
+            raise ExecutorError(f"workers = {self.workers}: must be >= 1")
+        self._context = multiprocessing.get_context("spawn")
+        self._pool: list[_Worker] = []
+        self._failed_starts = 0  # in a row; a few are a killed worker, more a broken install
+
+    def __enter__(self) -> LocalPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Kill every worker now (they hold nothing that needs a clean exit)."""
+        for worker in self._pool:
+            worker.stop()
+        self._pool = []
+
+    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str, object]]:
+        """Run ``jobs`` (key, args) pairs; yield (key, result or ``Lost``) as each ends.
+
+        Raises:
+            ExecutorError: ``MAX_FAILED_STARTS`` workers in a row died before they
+                were ready (a broken install).
+        """
+        jobs = iter(jobs)
+        first = next(jobs, None)
+        if first is None:
+            return
+        jobs = itertools.chain([first], jobs)
+        retry: list[tuple[str, tuple]] = []  # jobs not delivered to a worker that had died
+        more = True
+        for _ in range(self.workers):
+            self._start(len(self._pool))
+        while True:
+            for worker in self._pool:  # feed every ready, idle worker
+                if more and worker.ready and worker.job is None:
+                    job = retry.pop() if retry else next(jobs, None)
+                    if job is None:
+                        more = False
+                        break
+                    worker.job = job
+                    try:
+                        worker.conn.send(job)
+                    except OSError:  # it died idle: the job goes to the next worker
+                        retry.append(job)
+                        worker.job = None
+            if not more and all(w.job is None for w in self._pool):
+                return
+            waits = [w.conn for w in self._pool] + [w.process.sentinel for w in self._pool]
+            ready = set(wait_ready(waits, timeout=WAIT_S))
+            for i, worker in enumerate(self._pool):
+                if worker.conn in ready or worker.process.sentinel in ready:
+                    outcome, dead = self._collect(worker)
+                    if dead:
+                        worker.stop()
+                        self._start(i)
+                    if outcome is not None:
+                        yield outcome
+
+    def _start(self, i: int) -> None:
+        """A new worker in place ``i`` of the pool (appended at the end).
+
+        SIGINT and SIGTERM wait until it is in the pool: stopped halfway, a
+        spawn would leave a child reading its start-up data from a closed pipe.
+        """
+        with _deferred_stop():
+            worker = _Worker(self._context, self.fn)
+            if i < len(self._pool):
+                self._pool[i] = worker
+            else:
+                self._pool.append(worker)
+
+    def _collect(self, worker: _Worker) -> tuple[tuple[str, object] | None, bool]:
+        """(the message from ``worker`` or its job as ``Lost`` if it died, whether it died)."""
+        try:
+            if worker.conn.poll():
+                tag, ok, value = worker.conn.recv()
+                if tag == "ready":
+                    worker.ready = True
+                    self._failed_starts = 0
+                    return None, False
+                worker.job = None
+                return (tag, value if ok else Lost(value)), False
+        except (EOFError, OSError):
+            pass
+        else:
+            if worker.process.is_alive():
+                return None, False  # woken by nothing: look again
+        worker.process.join(WAIT_S)  # the pipe closed first; the exit code follows
+        cause = death_cause(worker.process.exitcode)
+        if not worker.ready:
+            self._failed_starts += 1
+            if self._failed_starts >= MAX_FAILED_STARTS:
+                raise ExecutorError(f"workers cannot start ({cause})")
+            return None, True
+        if worker.job is None:  # died idle: nothing lost
+            return None, True
+        key, _ = worker.job
+        worker.job = None
+        return (key, Lost(cause)), True
+
+
+class FuturesPool:
+    """Any ``concurrent.futures`` executor, fed at most ``window`` jobs at a time."""
+
+    def __init__(self, fn: Callable, executor: Executor, *, window: int = 64):
+        self.fn, self.executor, self.window = fn, executor, window
+        self._pending: dict = {}
+
+    def __enter__(self) -> FuturesPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for future in self._pending:
+            future.cancel()
+        self._pending = {}
+
+    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str, object]]:
+        """As ``LocalPool.run``; a failed future is a ``Lost(cause, known=False)``."""
+        jobs = iter(jobs)
+        more = True
+        while True:
+            while more and len(self._pending) < self.window:
+                job = next(jobs, None)
+                if job is None:
+                    more = False
+                    break
+                key, args = job
+                self._pending[self.executor.submit(self.fn, *args)] = key
+            if not self._pending:
+                return
+            done, _ = wait_futures(list(self._pending), timeout=WAIT_S, return_when=FIRST_COMPLETED)
+            for future in done:
+                key = self._pending.pop(future)
+                try:
+                    yield key, future.result()
+                except Exception as err:
+                    yield key, Lost(one_line(err), known=False)
+
+
+class Progress:
+    """A tqdm bar on a terminal; otherwise a plain line at every tenth of the jobs.
+
+    Args:
+        total: Jobs in all; done: already finished before this run.
+        tty: Draw a bar (stderr is a terminal); quiet: print nothing.
+        name: Prefix of the lines ("sweep").
+    """
+
+    def __init__(self, total: int, done: int, *, tty: bool, quiet: bool = False, name="jobs"):
+        self.total, self.count, self.quiet, self.name = total, done, quiet, name
+        self._next_log = done + max(1, total // 10)
+        self._bar = None
+        if tty and not quiet:
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, initial=done, unit="trial", desc=name, file=sys.stderr)
+
+    def say(self, line: str) -> None:
+        """One line for the user (above the bar, if there is one)."""
+        if self.quiet:
+            return
+        if self._bar is not None:
+            self._bar.write(line, file=sys.stderr)
+        else:
+            print(line, file=sys.stderr, flush=True)
+
+    def update(self, text: str, extra: str = "") -> None:
+        """One job ended; ``text`` says which and how; ``extra`` is appended to log lines."""
+        self.count += 1
+        if self._bar is not None:
+            self._bar.set_postfix_str(text, refresh=False)
+            self._bar.update(1)
+        elif not self.quiet and (self.count >= self._next_log or self.count == self.total):
+            self.say(f"[{self.count}/{self.total}] {text}{extra}")
+            self._next_log = self.count + max(1, self.total // 10)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()

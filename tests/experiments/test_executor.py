@@ -1,0 +1,164 @@
+"""The job executor: one job per worker at a time, deaths cost only their job, nothing inherited."""
+
+import ctypes
+import fcntl
+import itertools
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+from bench.experiments.executor import (
+    FuturesPool,
+    Interrupted,
+    LocalPool,
+    Lost,
+    death_cause,
+    interruptible,
+)
+
+
+def job(kind: str, value: int):
+    """The test's job (top level, so spawned workers import it): some of them kill their worker."""
+    if kind == "exit":
+        os._exit(3)
+    if kind == "segfault":
+        ctypes.string_at(0)  # reads address 0: SIGSEGV
+    if kind == "raise":
+        raise ValueError(f"bad value {value}")
+    if kind == "sleep":
+        time.sleep(value)
+    return value * 2
+
+
+def open_inodes(_kind: str, _value: int) -> set[tuple[int, int]]:
+    """(device, inode) of every file this process has open."""
+    out = set()
+    for name in os.listdir("/proc/self/fd"):
+        try:
+            st = os.stat(f"/proc/self/fd/{name}")
+        except OSError:
+            continue
+        out.add((st.st_dev, st.st_ino))
+    return out
+
+
+def test_a_dying_job_costs_only_itself_and_the_others_finish():
+    jobs = [(f"ok{i}", ("ok", i)) for i in range(6)]
+    jobs[1] = ("exit", ("exit", 0))
+    jobs[3] = ("segfault", ("segfault", 0))
+    jobs[4] = ("raise", ("raise", 7))
+    with LocalPool(job, workers=2) as pool:
+        results = dict(pool.run(jobs))
+    assert results.pop("exit") == Lost("worker died: exit code 3")
+    assert results.pop("segfault") == Lost("worker died: signal 11 (SIGSEGV)")
+    assert results.pop("raise") == Lost("ValueError: bad value 7")
+    assert results == {"ok0": 0, "ok2": 4, "ok5": 10}
+
+
+def test_a_job_that_always_kills_its_worker_does_not_stop_the_pool():
+    jobs = [("exit", ("exit", 0))] * 5 + [("ok", ("ok", 21))]
+    with LocalPool(job, workers=1) as pool:
+        results = list(pool.run(jobs))
+    assert results[:5] == [("exit", Lost("worker died: exit code 3"))] * 5
+    assert results[5] == ("ok", 42)
+
+
+def test_jobs_are_taken_lazily_and_leaving_stops_the_workers():
+    taken = itertools.count()
+    endless = ((str(i), ("ok", i)) for i in taken)
+    with LocalPool(job, workers=2) as pool:
+        for n, _ in enumerate(pool.run(endless), start=1):
+            if n == 5:
+                break
+        processes = [w.process for w in pool._pool]
+    assert next(taken) <= 5 + 2 + 1  # what was asked for, plus one in flight per worker
+    assert all(not p.is_alive() for p in processes)
+
+
+def test_workers_hold_no_file_of_the_parent(tmp_path):
+    lock = tmp_path / "table.csv"
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    try:
+        st = os.fstat(fd)
+        with LocalPool(open_inodes, workers=1) as pool:
+            [(_, inodes)] = list(pool.run([("fds", ("", 0))]))
+    finally:
+        os.close(fd)
+    assert (st.st_dev, st.st_ino) not in inodes  # so never the table's flock
+
+
+def test_a_failed_future_is_lost_without_blame():
+    with ThreadPoolExecutor(1) as executor, FuturesPool(job, executor, window=2) as pool:
+        results = dict(pool.run([("a", ("ok", 1)), ("b", ("raise", 2))]))
+    assert results == {"a": 2, "b": Lost("ValueError: bad value 2", known=False)}
+
+
+def test_sigterm_interrupts_like_sigint():
+    with pytest.raises(Interrupted) as stop, interruptible():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)
+    assert stop.value.signum == signal.SIGTERM and isinstance(stop.value, KeyboardInterrupt)
+    assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+
+
+def test_death_causes_read_as_words():
+    assert death_cause(-9) == "worker died: signal 9 (SIGKILL)"
+    assert death_cause(1) == "worker died: exit code 1"
+
+
+ORPHAN_SCRIPT = """
+import time
+from bench.experiments.executor import LocalPool
+
+def nap(seconds):
+    time.sleep(seconds)
+
+if __name__ == "__main__":
+    with LocalPool(nap, workers=2) as pool:
+        print("running", flush=True)
+        for _ in pool.run([("a", (60,)), ("b", (60,))]):
+            pass
+"""
+
+
+def test_busy_workers_die_with_their_killed_parent(tmp_path):
+    script = tmp_path / "orphans.py"
+    script.write_text(ORPHAN_SCRIPT)
+    proc = subprocess.Popen(
+        [sys.executable, str(script)], start_new_session=True, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert proc.stdout.readline() == "running\n"
+        deadline = time.monotonic() + 30
+        while len(_session(proc.pid)) < 4 and time.monotonic() < deadline:  # parent, 2 + tracker
+            time.sleep(0.05)
+        time.sleep(1.0)  # the workers are asleep in their 60 s jobs
+        proc.kill()
+        proc.wait()
+        deadline = time.monotonic() + 3
+        while _session(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert _session(proc.pid) == [], "workers outlived their parent"
+    finally:
+        for pid in _session(proc.pid):
+            os.kill(pid, signal.SIGKILL)
+
+
+def _session(sid: int) -> list[int]:
+    """Pids of the live processes of session ``sid``."""
+    out = []
+    for name in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            stat = open(f"/proc/{name}/stat").read()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2 :].split()  # state ppid pgrp session ...
+        if int(fields[3]) == sid and fields[0] != "Z":
+            out.append(int(name))
+    return out
