@@ -37,26 +37,26 @@ of the (scaled) robot spec, not its path; editing a spec file gives new ids.
 
 from __future__ import annotations
 
-import hashlib
-import itertools
-import json
 import math
 import tomllib
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
-import numpy as np
-
+from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
+    TIMESTEP,
+    Body,
+    Box,
+    SweepTrial,
+    TrialSet,
+    spec_text,
+)
 from bench.sim.model import ACTUATOR_MODES
-from bench.sim.trial import TrialSpec
 from planner.errors import SlopewalkError
 from planner.spec import LINK_NAMES, RobotSpec, load_spec
-from planner.trajectory import GaitParams
 
 SWEEPS_DIR = Path(__file__).parent / "sweeps"
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
-TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 TOP_KEYS = ("description", "steps", "seed", "grid", "trial")
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale")
 DEFAULTS = {
@@ -78,99 +78,18 @@ class SweepError(SlopewalkError):
 
 
 @dataclass(frozen=True)
-class SweepTrial:
-    """One trial of a sweep, with its inputs as written in the sweep file.
-
-    Attributes:
-        step_time: Step completion time [s].
-        slope_deg: Plane inclination [deg].
-        friction: Coulomb μ of the feet on the plane.
-        actuators: "stiff" or "servo".
-        robot: The spec path as written in the file, or "default".
-        mass_scale: (group, factor) pairs in file order; () = no scaling.
-        steps: Steps per walk.
-        seed: The sweep's seed, recorded with the row.
-        spec: The robot, mass scaling applied.
-    """
-
-    step_time: float
-    slope_deg: float
-    friction: float
-    actuators: str
-    robot: str
-    mass_scale: tuple[tuple[str, float], ...]
-    steps: int
-    seed: int
-    spec: RobotSpec = field(repr=False, compare=False)
-
-    @cached_property
-    def trial_id(self) -> str:
-        """12 hex digits of a SHA-256 over the inputs that decide the outcome (module doc)."""
-        key = {
-            "step_time": self.step_time,
-            "slope_deg": self.slope_deg,
-            "friction": self.friction,
-            "actuators": self.actuators,
-            "steps": self.steps,
-            "seed": self.seed,
-            "timestep": TIMESTEP,
-            "spec": asdict(self.spec),
-        }
-        text = json.dumps(key, sort_keys=True, default=float)
-        return hashlib.sha256(text.encode()).hexdigest()[:12]
-
-    @property
-    def mass_scale_text(self) -> str:
-        """``"legs=2"``, ``"all=10;legs=2"``, or ``"none"``."""
-        return ";".join(f"{g}={f:g}" for g, f in self.mass_scale) or "none"
-
-    @property
-    def label(self) -> str:
-        """Short human description, e.g. ``T=0.5 s slope=0 mu=0.6``."""
-        text = f"T={self.step_time:g} s slope={self.slope_deg:g} mu={self.friction:g}"
-        if self.actuators != "stiff":
-            text += f" {self.actuators}"
-        if self.mass_scale:
-            text += f" mass {self.mass_scale_text}"
-        if self.robot != "default":
-            text += f" robot {self.robot}"
-        return text
-
-    def gait(self) -> GaitParams:
-        """The nominal gait of this trial (radians from here on)."""
-        return GaitParams.nominal(
-            self.spec, self.step_time, slope=float(np.deg2rad(self.slope_deg)), steps=self.steps
-        )
-
-    def trial_spec(self) -> TrialSpec:
-        return TrialSpec(
-            self.gait(), friction=self.friction, actuators=self.actuators, timestep=TIMESTEP
-        )
-
-    def inputs(self) -> dict:
-        """The input columns of this trial's row."""
-        return {
-            "trial_id": self.trial_id,
-            "step_time": self.step_time,
-            "slope_deg": self.slope_deg,
-            "friction": self.friction,
-            "actuators": self.actuators,
-            "robot": self.robot,
-            "mass_scale": self.mass_scale_text,
-            "steps": self.steps,
-            "seed": self.seed,
-        }
-
-
-@dataclass(frozen=True)
 class SweepConfig:
-    """A parsed sweep file: its trials, unique by ``trial_id``, in file order."""
+    """A parsed sweep file: its trials (a lazy ``TrialSet``, unique by ``trial_id``, file order)."""
 
     source: str
     steps: int
     seed: int
-    trials: tuple[SweepTrial, ...]
+    boxes: tuple[Box, ...] = field(repr=False)
     description: str = ""
+
+    @cached_property
+    def trials(self) -> TrialSet:
+        return TrialSet(self.boxes, self.steps, self.seed)
 
 
 def load_sweep(path: str | Path | None = None) -> SweepConfig:
@@ -184,15 +103,21 @@ def load_sweep(path: str | Path | None = None) -> SweepConfig:
     try:
         with open(path, "rb") as f:
             data = tomllib.load(f)
-    except (FileNotFoundError, IsADirectoryError):
+    except FileNotFoundError:
         raise SweepError(f"sweep file {str(path)!r}: no such file") from None
+    except IsADirectoryError:
+        raise SweepError(f"sweep file {str(path)!r}: is a directory, not a sweep TOML") from None
     except tomllib.TOMLDecodeError as err:
         raise SweepError(f"sweep file {str(path)!r}: not valid TOML ({err})") from None
     return sweep_from_dict(data, base_dir=path.parent, source=str(path))
 
 
 def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> SweepConfig:
-    """Build a SweepConfig from parsed TOML; robot paths are relative to ``base_dir``."""
+    """Build a SweepConfig from parsed TOML; robot paths are relative to ``base_dir``.
+
+    Every value of every grid axis is checked (its range, and the gait it makes
+    with the first values of the other axes); the product is not expanded.
+    """
     _known(data, TOP_KEYS, "", source)
     steps = data.get("steps", 4)
     seed = data.get("seed", 0)
@@ -208,28 +133,75 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
     if not grids and not singles:
         raise SweepError(f"{source}: no trials: give a [grid] table or [[trial]] entries")
     robots: dict[str, RobotSpec] = {}
-    combos: list[tuple[str, dict]] = []
+    boxes = []
     for where, table in grids:
         _known(table, TRIAL_KEYS, f"{where}.", source)
+        if not table:
+            raise SweepError(
+                f"{source}: {where} is empty: give at least one list, e.g. step_time = [1.0]"
+            )
         axes = {}
         for key in TRIAL_KEYS:
             values = table.get(key, [DEFAULTS[key]])
             if not isinstance(values, list) or not values:
                 raise SweepError(f"{source}: {where}.{key} = {values!r}: must be a non-empty list")
             axes[key] = values
-        combos += [(where, dict(zip(TRIAL_KEYS, c, strict=True))) for c in _product(axes)]
+        boxes.append(_box(axes, steps, seed, robots, base_dir, f"{source}: {where}"))
     for where, table in singles:
         _known(table, TRIAL_KEYS, f"{where}.", source)
-        combos.append((where, {key: table.get(key, DEFAULTS[key]) for key in TRIAL_KEYS}))
-    trials: dict[str, SweepTrial] = {}
-    for where, values in combos:
-        trial = _trial(values, steps, seed, robots, base_dir, f"{source}: {where}")
-        trials.setdefault(trial.trial_id, trial)
-    return SweepConfig(source, steps, seed, tuple(trials.values()), description)
+        axes = {key: [table.get(key, DEFAULTS[key])] for key in TRIAL_KEYS}
+        boxes.append(_box(axes, steps, seed, robots, base_dir, f"{source}: {where}"))
+    return SweepConfig(source, steps, seed, tuple(boxes), description)
 
 
-def _product(axes: dict[str, list]):
-    return itertools.product(*(axes[key] for key in TRIAL_KEYS))
+def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
+    """Check each value of each axis once; the grid as a ``Box``."""
+    step_times = [_positive(v, "step_time", "s", where) for v in axes["step_time"]]
+    slopes = []
+    for value in axes["slope"]:
+        slope = _number(value, "slope", where)
+        if not -60 < slope < 60:
+            raise SweepError(f"{where}.slope = {slope:g} deg: must lie in (-60, 60) deg")
+        slopes.append(slope)
+    frictions = [_positive(v, "friction", "", where) for v in axes["friction"]]
+    for actuators in axes["actuators"]:
+        if actuators not in ACTUATOR_MODES:
+            raise SweepError(
+                f"{where}.actuators = {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}"
+            )
+    bodies = [
+        _body(robot, _mass_scale(scale, where), robots, base_dir, where)
+        for robot in axes["robot"]
+        for scale in axes["mass_scale"]
+    ]
+    values = (
+        _unique((repr(v), v) for v in step_times),
+        _unique((repr(v), v) for v in slopes),
+        _unique((repr(v), v) for v in frictions),
+        _unique((a, a) for a in axes["actuators"]),
+        _unique((b.spec_json, b) for b in bodies),
+    )
+    box = Box(where, values)
+    # The gait's own range checks (e.g. dt <= step_time/10) of each value of
+    # each axis, the other axes at their first value: each check involves one axis.
+    first = [axis[0][1] for axis in values]
+    for k, axis in enumerate(values):
+        for _, value in axis[1:] if k else axis:
+            combo = [*first[:k], value, *first[k + 1 :]]
+            trial = TrialSet((box,), steps, seed).make(combo)
+            try:
+                trial.trial_spec()
+            except SlopewalkError as err:
+                raise SweepError(f"{where}: {err}") from None
+    return box
+
+
+def _unique(pairs) -> tuple[tuple[str, object], ...]:
+    """(key, value) pairs with the first of each key kept, in order."""
+    out: dict[str, object] = {}
+    for key, value in pairs:
+        out.setdefault(key, value)
+    return tuple(out.items())
 
 
 def _known(table: dict, allowed: tuple[str, ...], prefix: str, source: str) -> None:
@@ -250,22 +222,7 @@ def _tables(data: dict, key: str, source: str) -> list[tuple[str, dict]]:
     raise SweepError(f"{source}: {key} must be a table [{key}] or an array of tables [[{key}]]")
 
 
-def _trial(values, steps, seed, robots, base_dir, where) -> SweepTrial:
-    step_time = _number(values["step_time"], "step_time", where)
-    if not step_time > 0:
-        raise SweepError(f"{where}.step_time = {step_time:g} s: must be > 0")
-    slope = _number(values["slope"], "slope", where)
-    if not -60 < slope < 60:
-        raise SweepError(f"{where}.slope = {slope:g} deg: must lie in (-60, 60) deg")
-    friction = _number(values["friction"], "friction", where)
-    if not friction > 0:
-        raise SweepError(f"{where}.friction = {friction:g}: must be > 0")
-    actuators = values["actuators"]
-    if actuators not in ACTUATOR_MODES:
-        raise SweepError(
-            f"{where}.actuators = {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}"
-        )
-    robot = values["robot"]
+def _body(robot, scale, robots, base_dir, where) -> Body:
     if not isinstance(robot, str) or not robot:
         raise SweepError(f"{where}.robot = {robot!r}: must be a spec file path")
     if robot not in robots:
@@ -274,7 +231,6 @@ def _trial(values, steps, seed, robots, base_dir, where) -> SweepTrial:
             robots[robot] = load_spec(path)
         except SlopewalkError as err:
             raise SweepError(f"{where}.robot: {err}") from None
-    scale = _mass_scale(values["mass_scale"], where)
     spec = robots[robot]
     if scale:
         factors = dict.fromkeys(LINK_NAMES, 1.0)
@@ -282,12 +238,14 @@ def _trial(values, steps, seed, robots, base_dir, where) -> SweepTrial:
             for name in MASS_GROUPS[group]:
                 factors[name] *= factor
         spec = spec.with_mass_scale(factors)
-    trial = SweepTrial(step_time, slope, friction, actuators, robot, scale, steps, seed, spec)
-    try:
-        trial.trial_spec()  # the gait's own range checks (e.g. dt <= step_time/10)
-    except SlopewalkError as err:
-        raise SweepError(f"{where}: {err}") from None
-    return trial
+    return Body(robot, scale, spec, spec_text(spec))
+
+
+def _positive(value, key: str, unit: str, where: str) -> float:
+    number = _number(value, key, where)
+    if not number > 0:
+        raise SweepError(f"{where}.{key} = {number:g}{' ' + unit if unit else ''}: must be > 0")
+    return number
 
 
 def _number(value, key: str, where: str) -> float:

@@ -1,0 +1,254 @@
+"""The trials of a sweep: one trial's inputs and id, and the lazy set of a file's grids.
+
+``SweepTrial`` is one trial as written in a sweep file (degrees at this edge);
+its ``trial_id`` is a stable hash of everything that decides its outcome.
+``TrialSet`` is the de-duplicated union of a file's grids, counted without
+being listed and walked lazily, so a 10^6-trial grid costs no memory.
+``sweep_config.py`` reads and checks the file and builds these.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from bench.sim.playback import HOLD_TIME, SETTLE_TIME
+from bench.sim.trial import TrialSpec
+from planner.spec import RobotSpec
+from planner.trajectory import GaitParams
+
+TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
+CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk
+
+
+def spec_text(spec: RobotSpec) -> str:
+    """The robot's part of the ``trial_id`` text: its fields as sorted JSON."""
+    return json.dumps(asdict(spec), sort_keys=True, default=float)
+
+
+@dataclass(frozen=True)
+class SweepTrial:
+    """One trial of a sweep, with its inputs as written in the sweep file.
+
+    Attributes:
+        step_time: Step completion time [s].
+        slope_deg: Plane inclination [deg].
+        friction: Coulomb μ of the feet on the plane.
+        actuators: "stiff" or "servo".
+        robot: The spec path as written in the file, or "default".
+        mass_scale: (group, factor) pairs in file order; () = no scaling.
+        steps: Steps per walk.
+        seed: The sweep's seed, recorded with the row.
+        spec: The robot, mass scaling applied.
+    """
+
+    step_time: float
+    slope_deg: float
+    friction: float
+    actuators: str
+    robot: str
+    mass_scale: tuple[tuple[str, float], ...]
+    steps: int
+    seed: int
+    spec: RobotSpec = field(repr=False, compare=False)
+    spec_json: str = field(default="", repr=False, compare=False)  # spec_text(spec), if known
+
+    @cached_property
+    def trial_id(self) -> str:
+        """12 hex digits of a SHA-256 over the inputs that decide the outcome (module doc).
+
+        The hashed text is ``json.dumps`` (keys sorted) of the inputs with the
+        spec as a dict; the spec's part is made once per robot (``spec_text``)
+        and set in, which gives the same text at a fraction of the cost.
+        """
+        key = {
+            "step_time": self.step_time,
+            "slope_deg": self.slope_deg,
+            "friction": self.friction,
+            "actuators": self.actuators,
+            "steps": self.steps,
+            "seed": self.seed,
+            "timestep": TIMESTEP,
+            "spec": "\0",
+        }
+        text = json.dumps(key, sort_keys=True, default=float)
+        text = text.replace('"\\u0000"', self.spec_json or spec_text(self.spec), 1)
+        return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+    @property
+    def mass_scale_text(self) -> str:
+        """``"legs=2"``, ``"all=10;legs=2"``, or ``"none"``."""
+        return ";".join(f"{g}={f:g}" for g, f in self.mass_scale) or "none"
+
+    @property
+    def label(self) -> str:
+        """Short human description, e.g. ``T=0.5 s slope=0 mu=0.6``."""
+        text = f"T={self.step_time:g} s slope={self.slope_deg:g} mu={self.friction:g}"
+        if self.actuators != "stiff":
+            text += f" {self.actuators}"
+        if self.mass_scale:
+            text += f" mass {self.mass_scale_text}"
+        if self.robot != "default":
+            text += f" robot {self.robot}"
+        return text
+
+    def gait(self) -> GaitParams:
+        """The nominal gait of this trial (radians from here on)."""
+        return GaitParams.nominal(
+            self.spec, self.step_time, slope=float(np.deg2rad(self.slope_deg)), steps=self.steps
+        )
+
+    def trial_spec(self) -> TrialSpec:
+        return TrialSpec(
+            self.gait(), friction=self.friction, actuators=self.actuators, timestep=TIMESTEP
+        )
+
+    def inputs(self) -> dict:
+        """The input columns of this trial's row."""
+        return {
+            "trial_id": self.trial_id,
+            "step_time": self.step_time,
+            "slope_deg": self.slope_deg,
+            "friction": self.friction,
+            "actuators": self.actuators,
+            "robot": self.robot,
+            "mass_scale": self.mass_scale_text,
+            "steps": self.steps,
+            "seed": self.seed,
+        }
+
+
+@dataclass(frozen=True)
+class Body:
+    """A robot as one grid value: the spec file, its mass scaling, the scaled spec."""
+
+    robot: str
+    mass_scale: tuple[tuple[str, float], ...]
+    spec: RobotSpec = field(repr=False)
+    spec_json: str = field(repr=False)  # its part of the trial_id text
+
+
+AXES = ("step_time", "slope", "friction", "actuators", "body")
+
+
+@dataclass(frozen=True)
+class Box:
+    """One ``[grid]`` (or one ``[[trial]]``, a box of single values): checked values per axis.
+
+    ``values[k]`` holds (identity key, value) pairs of axis ``AXES[k]`` in file
+    order, duplicates (same key) dropped; the keys decide a trial's ``trial_id``,
+    so two trials are the same trial exactly when all their keys are equal.
+    """
+
+    where: str
+    values: tuple[tuple[tuple[str, object], ...], ...]
+
+    @cached_property
+    def keys(self) -> tuple[frozenset, ...]:
+        return tuple(frozenset(k for k, _ in axis) for axis in self.values)
+
+    @property
+    def size(self) -> int:
+        return math.prod(len(axis) for axis in self.values)
+
+    def holds(self, keys: tuple[str, ...]) -> bool:
+        return all(k in s for k, s in zip(keys, self.keys, strict=True))
+
+    def meet(self, other: Box) -> tuple[frozenset, ...] | None:
+        """The key sets of the intersection with ``other``, or None if empty."""
+        out = tuple(a & b for a, b in zip(self.keys, other.keys, strict=True))
+        return out if all(out) else None
+
+
+def _union_size(boxes: list[tuple[frozenset, ...]]) -> int:
+    """Number of distinct points in a union of boxes (per-axis key sets), by inclusion-exclusion.
+
+    Each box adds its points not in the earlier ones; the earlier ones it meets
+    are few in any real sweep file, so the recursion stays small.
+    """
+    total = 0
+    for i, box in enumerate(boxes):
+        meets = []
+        for other in boxes[:i]:
+            both = tuple(a & b for a, b in zip(box, other, strict=True))
+            if all(both):
+                meets.append(both)
+        total += math.prod(len(s) for s in box) - _union_size(meets)
+    return total
+
+
+class TrialSet(Sequence):
+    """The trials of a sweep, in file order, unique by ``trial_id``, made as they are taken.
+
+    Nothing is expanded up front: ``len()`` counts the union of the grids
+    without listing it, and iterating walks each grid's product lazily,
+    skipping a trial an earlier grid (or ``[[trial]]``) already holds. A
+    10^6-trial grid costs its size in time only when it is walked, and no memory.
+    Indexing walks from the start (for tests and small sweeps).
+    """
+
+    def __init__(self, boxes: tuple[Box, ...], steps: int, seed: int):
+        self._boxes, self._steps, self._seed = boxes, steps, seed
+
+    @cached_property
+    def _len(self) -> int:
+        return _union_size([box.keys for box in self._boxes])
+
+    def __len__(self) -> int:
+        return self._len
+
+    def __iter__(self) -> Iterator[SweepTrial]:
+        for i, box in enumerate(self._boxes):
+            earlier = [b for b in self._boxes[:i] if box.meet(b) is not None]
+            for combo in itertools.product(*box.values):
+                if earlier and any(b.holds(tuple(k for k, _ in combo)) for b in earlier):
+                    continue
+                yield self.make([v for _, v in combo])
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return list(itertools.islice(self, *index.indices(len(self))))
+        if index < 0:
+            index += len(self)
+        if not 0 <= index < len(self):
+            raise IndexError(index)
+        return next(itertools.islice(self, index, None))
+
+    def make(self, values: list) -> SweepTrial:
+        """The trial of one value per axis (``AXES`` order)."""
+        step_time, slope, friction, actuators, body = values
+        return SweepTrial(
+            step_time,
+            slope,
+            friction,
+            actuators,
+            body.robot,
+            body.mass_scale,
+            self._steps,
+            self._seed,
+            body.spec,
+            body.spec_json,
+        )
+
+    def simulated_steps(self) -> float:
+        """Estimated MuJoCo steps of all trials (settle + walk + hold at ``TIMESTEP``).
+
+        The sum over the grids as written, scaled by the share of distinct
+        trials (grids that overlap count their common trials once).
+        """
+        written = total = 0.0
+        for box in self._boxes:
+            per_time = sum(
+                (SETTLE_TIME + HOLD_TIME + t * (self._steps + CLOSING_DSP)) / TIMESTEP
+                for _, t in box.values[0]
+            )
+            total += per_time * box.size / len(box.values[0])
+            written += box.size
+        return total * len(self) / written if written else 0.0
