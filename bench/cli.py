@@ -228,10 +228,15 @@ def build_parser() -> argparse.ArgumentParser:
         sub,
         "sweep",
         "run a sweep file's trials in parallel into DIR/sweep.csv (resumable)",
-        "Run every trial of a sweep file (format: docs/sweep-format.md), one CSV row per "
-        "finished trial, on the local cores or a Dask cluster; re-running skips the "
-        "finished ones. Without CONFIG, the paper's sweep, then the claims table and figures.",
+        "Run every trial of a sweep file (format: docs/sweep-format.md), on the local cores "
+        "or a Dask cluster, one CSV row per finished trial, appended to DIR/sweep.partial.csv "
+        "as it ends; when all are done the rows go to DIR/sweep.csv in the file's order. A "
+        "plain run plays every trial. If a run is stopped (Ctrl-C, kill), the same command "
+        "with --resume plays only the trials not yet done; with --out DIR naming a directory "
+        "that holds an unfinished run, it resumes without the flag. Without CONFIG, the "
+        "paper's sweep, then the claims table and figures.",
         "slopewalk sweep",
+        "slopewalk sweep --resume          # finish a killed 'slopewalk sweep'",
         "slopewalk sweep my_sweep.toml --out runs/slopes --workers 4 --record",
         "slopewalk sweep my_sweep.toml --cluster tcp://scheduler:8786 --report",
     )
@@ -258,6 +263,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="ADDRESS",
         help="run on a Dask distributed scheduler, e.g. tcp://host:8786 (workers need "
         "slopewalk installed)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="count the trials already in DIR (an unfinished run, or a finished sweep.csv) as "
+        "done and play the rest",
     )
     p.add_argument(
         "--record",

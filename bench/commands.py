@@ -210,9 +210,10 @@ def compare(args) -> None:
 
 
 def sweep(args) -> None:
+    import contextlib
     from pathlib import Path
 
-    from bench.experiments.sweep import open_executor, run_sweep
+    from bench.experiments.sweep import Stopped, open_cluster, run_sweep
     from bench.experiments.sweep_config import SweepError, load_sweep
 
     config = load_sweep(args.config)  # the whole file is checked before anything runs
@@ -223,13 +224,24 @@ def sweep(args) -> None:
             raise SweepError(f"--record: recordings are unavailable ({err})") from None
     out = Path(args.out) if args.out is not None else Path.cwd() / "results"
     check_output_dir(out)  # before any trial runs
-    with open_executor(workers=args.workers, cluster=args.cluster) as executor:
-        summary = run_sweep(
-            config, out, executor=executor, record=args.record, progress=sys.stderr.isatty()
-        )
+    resume = True if args.resume else None if args.out is not None else False
+    try:
+        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
+            summary = run_sweep(
+                config,
+                out,
+                workers=args.workers,
+                executor=executor,
+                resume=resume,
+                record=args.record,
+                progress=sys.stderr.isatty(),
+            )
+    except Stopped as stop:
+        print(f"slopewalk: {stop.message}", file=sys.stderr)
+        raise SystemExit(128 + stop.signum) from None
     print("\n".join(summary.lines()))
     if summary.lost:
-        raise SweepError(f"{len(summary.lost)} trials lost with their workers; re-run to resume")
+        raise SweepError(f"{len(summary.lost)} trials lost with their workers; add --resume")
     if args.config is None or args.report:
         from bench.experiments.sweep_table import read_table
         from bench.report.claims import ga_claims, write_report

@@ -187,15 +187,16 @@ def sweep_figures() -> dict:
     import os
     import resource
     import tempfile
+    from concurrent.futures import ProcessPoolExecutor
 
-    from bench.experiments.sweep import open_executor, run_sweep
+    from bench.experiments.sweep import run_sweep
     from bench.experiments.sweep_config import load_sweep
 
     config = load_sweep()
     workers = os.cpu_count() or 1
 
     def capacity() -> float:  # all workers stepping at once, ~1 s each, mean (not best) rate
-        with open_executor(workers=workers) as pool:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
             rates = [pool.submit(raw_step_rate, 40_000, 1) for _ in range(workers)]
             return sum(f.result() for f in rates)
 
@@ -209,8 +210,7 @@ def sweep_figures() -> dict:
     before = capacity()
     with tempfile.TemporaryDirectory() as out:
         start, start_cpu = time.perf_counter(), cpu_s()
-        with open_executor(workers=workers) as pool:
-            summary = run_sweep(config, out, executor=pool, quiet=True)
+        summary = run_sweep(config, out, workers=workers, quiet=True)
         wall, cpu = time.perf_counter() - start, cpu_s() - start_cpu
     raw = (before + capacity()) / 2  # before and after the sweep: drifting load averages out
     raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)

@@ -1,17 +1,32 @@
 """Run a sweep: every trial of a sweep file, in parallel, each row written as it finishes.
 
-One code path for local cores and a cluster: trials go to a
-``concurrent.futures`` executor, a ``ProcessPoolExecutor`` by default or the
-executor of a Dask ``distributed.Client`` (``--cluster ADDRESS``), each as a
-call of the top-level ``run_one``; results are collected with ``as_completed``
-and appended to ``DIR/sweep.csv`` at once (``sweep_table.py``). Trials whose
-``trial_id`` is already in the table are skipped, so a killed sweep resumes
-where it stopped. When every trial is done, the table is rewritten in the
-sweep file's order (atomically), so the committed file is stable across runs.
+The sweep-specific half; the generic half (workers, one job each at a time,
+worker deaths, signals, progress) is ``executor.py``. Trials run as calls of
+the top-level ``run_one`` on local spawned workers (``LocalPool``) or on any
+``concurrent.futures`` executor, e.g. a Dask ``distributed.Client``'s
+(``--cluster ADDRESS``, ``FuturesPool``).
 
-A trial that raises (e.g. an unreachable gait) becomes a row with the verdicts
-``error`` and the one-line message; a trial lost with its worker (a crashed
-process, a lost cluster) leaves no row and is reported, to be run by a re-run.
+A run directory holds ``sweep.partial.csv`` while a run is going and
+``sweep.csv`` when it is done (``sweep_table.py``):
+
+- A fresh run (``resume=False``, the default of ``slopewalk sweep``) plays
+  every trial into a new ``sweep.partial.csv``; when all are done, their rows
+  are written to ``sweep.csv`` in the sweep file's order (atomically, replacing
+  the finished table of an earlier run: the same trials give the same bytes)
+  and the partial table is removed. A ``sweep.csv`` that is not a sweep table
+  is refused, never overwritten. So is an unfinished run in the directory,
+  which is the user's to resume or remove.
+- ``resume=True`` (``--resume``) counts the rows of the unfinished run, or of
+  the finished ``sweep.csv`` when there is none, as done and plays the rest.
+- ``resume=None`` (``--out DIR`` given) resumes an unfinished run found in
+  ``DIR``, else starts a fresh one.
+
+A trial that raises (e.g. an unreachable gait) is a row with the verdicts
+``error`` and the one-line message; so is a trial whose worker died (a segfault,
+``os._exit``, ``kill -9``: "worker died: signal 9 (SIGKILL)"), and the sweep
+goes on. A trial lost by a cluster executor, which cannot say which trial a
+lost worker held, leaves no row and is reported, to be run by ``--resume``.
+SIGINT and SIGTERM stop the run with every finished row kept (``Stopped``).
 
 On a cluster, the workers need slopewalk installed (they import ``bench``), and
 ``--record`` writes ``.rrd`` files from the workers, so ``DIR`` must be on a
@@ -22,22 +37,30 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
-import sys
 import time
-from collections.abc import Iterator
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from bench.experiments.executor import (
+    FuturesPool,
+    Interrupted,
+    LocalPool,
+    Lost,
+    Progress,
+    interruptible,
+    one_line,
+)
 from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.experiments.sweep_table import SweepTable
-from planner.errors import SlopewalkError
+from bench.experiments.sweep_table import SweepTable, read_rows
 
 TABLE_NAME = "sweep.csv"
+PARTIAL_NAME = "sweep.partial.csv"
 RECORDINGS_DIR = "recordings"
+SORT_LIMIT = 10_000  # sweeps up to this size run longest trial first; larger ones in file order
+SIM_RATE = 35_000.0  # [sim steps/s] per worker, the first estimate (2-core x86 machine, 1 ms steps)
 
 
 def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
@@ -52,7 +75,6 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
     from bench.sim.trial import run_trial
     from planner.plan import plan_walk
 
-    start = time.perf_counter()
     try:
         plan = plan_walk(trial.spec, trial.gait())
         result = run_trial(trial.spec, trial.trial_spec(), plan=plan)
@@ -61,15 +83,19 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
             try:
                 _record(Path(record_dir), trial.trial_id, plan, result)
             except Exception as err:  # the trial stands; a re-run with --record retries
-                row["error"] = f"recording failed: {_one_line(err)}"
+                row["error"] = f"recording failed: {one_line(err)}"
     except Exception as err:  # a trial's failure is a result, not a crash of the sweep
-        row = trial.inputs() | {
-            "analytic_verdict": "error",
-            "simulated_verdict": "error",
-            "error": _one_line(err),
-        }
-    row["wall_s"] = time.perf_counter() - start
+        row = error_row(trial, one_line(err))
     return row
+
+
+def error_row(trial: SweepTrial, cause: str) -> dict:
+    """The row of a trial that raised or killed its worker, ``cause`` in one line."""
+    return trial.inputs() | {
+        "analytic_verdict": "error",
+        "simulated_verdict": "error",
+        "error": cause,
+    }
 
 
 def outcome_columns(result, plan) -> dict:
@@ -113,61 +139,46 @@ def _record(directory: Path, trial_id: str, plan, result) -> None:
             os.remove(tmp)
 
 
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    if isinstance(err, SlopewalkError):  # its message says it all
-        return text
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
-
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops the sweep."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 @contextlib.contextmanager
-def open_executor(*, workers: int | None = None, cluster: str | None = None) -> Iterator:
-    """A ``concurrent.futures`` executor: local processes, or a Dask cluster's.
+def open_cluster(cluster: str):
+    """The ``concurrent.futures`` executor of a Dask cluster's ``Client``.
 
     Args:
-        workers: Local worker processes (default ``os.cpu_count()``); ignored
-            with ``cluster``.
         cluster: Dask scheduler address, e.g. ``tcp://host:8786``.
 
     Raises:
         SweepError: the cluster cannot be reached, or Dask is not installed.
     """
-    if cluster is not None:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise SweepError("--cluster needs Dask: pip install 'dask[distributed]'") from None
-        from distributed.comm.addressing import parse_address, parse_host_port
-
-        try:  # a malformed address, refused before a Client exists (its __del__ would hang)
-            scheme, location = parse_address(cluster, strict=True)
-            if scheme in ("tcp", "tls"):
-                parse_host_port(location)
-        except ValueError as err:
-            raise SweepError(
-                f"cluster {cluster!r}: not a scheduler address like tcp://host:8786 ({err})"
-            ) from None
-        try:
-            client = Client(cluster, timeout=10, set_as_default=False)
-        except Exception as err:
-            raise SweepError(f"cluster {cluster!r}: cannot connect ({_one_line(err)})") from None
-        try:
-            yield client.get_executor(pure=False)
-        finally:
-            client.close()
-        return
-    pool = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=_ignore_sigint)
     try:
-        yield pool
-    except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown(wait=True)
+        from distributed import Client
+    except ImportError:
+        raise SweepError("--cluster needs Dask: pip install 'dask[distributed]'") from None
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:  # a malformed address, refused before a Client exists (its __del__ would hang)
+        scheme, location = parse_address(cluster, strict=True)
+        if scheme in ("tcp", "tls"):
+            parse_host_port(location)
+    except ValueError as err:
+        raise SweepError(
+            f"cluster {cluster!r}: not a scheduler address like tcp://host:8786 ({err})"
+        ) from None
+    try:
+        client = Client(cluster, timeout=10, set_as_default=False)
+    except Exception as err:
+        raise SweepError(f"cluster {cluster!r}: cannot connect ({one_line(err)})") from None
+    try:
+        yield client.get_executor(pure=False)
+    finally:
+        client.close()
+
+
+class Stopped(Interrupted):
+    """A sweep stopped by SIGINT or SIGTERM; ``message`` says what was kept and how to go on."""
+
+    def __init__(self, signum: int, message: str):
+        super().__init__(signum)
+        self.message = message
 
 
 @dataclass(frozen=True)
@@ -175,12 +186,12 @@ class SweepSummary:
     """What a sweep run did.
 
     Attributes:
-        table: Path of the results table.
+        table: Path of the results table (``sweep.csv``, or the partial one if trials were lost).
         total: Trials in the sweep.
         resumed: Trials found finished in the table and skipped.
         ran: Trials run now (rows written).
-        errors: Rows of this run with the verdict ``error``.
-        lost: One line per trial lost with its worker (no row written).
+        errors: Rows of this run with the verdict ``error`` (worker deaths included).
+        lost: One line per trial lost by a cluster executor (no row written).
         sim_steps: Simulation steps of the trials run now.
         wall_s: Wall time of this run [s].
         verdicts: (analytic, simulated) -> count over the whole table.
@@ -197,128 +208,168 @@ class SweepSummary:
     verdicts: dict
 
     def lines(self) -> list[str]:
+        verdicts = ", ".join(f"{a}/{s} {n}" for (a, s), n in sorted(self.verdicts.items()))
         out = [
             f"sweep: {self.total} trials: {self.ran} run, {self.resumed} already done, "
             f"{self.errors} errors, {len(self.lost)} lost, in {self.wall_s:.1f} s"
             + (f" ({self.sim_steps / self.wall_s:.0f} sim steps/s)" if self.ran else ""),
-            "analytic / simulated verdicts: "
-            + ", ".join(f"{a}/{s} {n}" for (a, s), n in sorted(self.verdicts.items())),
+            "analytic / simulated verdicts: " + (verdicts or "none (no row written)"),
             f"wrote {self.table}",
         ]
         return out + [f"lost: {line}" for line in self.lost[:5]]
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
 
 
 def run_sweep(
     config: SweepConfig,
     out_dir: str | Path,
     *,
-    executor: Executor,
+    workers: int | None = None,
+    executor: Executor | None = None,
+    resume: bool | None = False,
     record: bool = False,
     progress: bool = False,
     quiet: bool = False,
 ) -> SweepSummary:
-    """Run the trials of ``config`` not yet in ``out_dir/sweep.csv``, appending each row.
+    """Run the trials of ``config`` into ``out_dir`` (module doc), appending each row.
 
     Args:
         config: The parsed sweep file.
-        out_dir: Output directory: ``sweep.csv`` and, with ``record``, ``recordings/``.
-        executor: Where trials run (``open_executor``).
+        out_dir: Run directory: ``sweep.csv`` and, with ``record``, ``recordings/``.
+        workers: Local worker processes (default all cores), when ``executor`` is None.
+        executor: A ``concurrent.futures`` executor to run on instead (e.g. ``open_cluster``).
+        resume: True: go on from the rows there; None: resume an unfinished run
+            if there is one; False: a fresh run (refused over an unfinished one).
         record: Also write ``recordings/<trial_id>.rrd`` per trial.
         progress: A tqdm bar on stderr; else a log line at every tenth of the sweep.
         quiet: Neither bar nor log lines.
+
+    Raises:
+        SweepError: a table there is not a sweep table, holds trials not in
+            ``config``, or is an unfinished run and ``resume`` is False.
+        Stopped: SIGINT or SIGTERM; the rows written so far stay in ``sweep.partial.csv``.
     """
     start = time.perf_counter()
     out_dir = Path(out_dir)
+    final, partial = out_dir / TABLE_NAME, out_dir / PARTIAL_NAME
     record_dir = out_dir / RECORDINGS_DIR if record else None
-    with SweepTable.open(out_dir / TABLE_NAME) as table:
+    workers = workers or os.cpu_count() or 1
+    finished = read_rows(final) if final.exists() else {}  # a corrupt one is refused here
+    with interruptible(), SweepTable.open(partial) as table:
+        try:
+            if not table.created and resume is False:
+                raise SweepError(
+                    f"{out_dir} holds an unfinished sweep ({len(table.rows)} trials in "
+                    f"{PARTIAL_NAME}): add --resume to finish it, or remove {partial} to start over"
+                )
+            if table.created and resume:
+                for line in finished.values():
+                    table.append_line(line)
+            _check_trials(table, config)
+        except BaseException:
+            if table.created:
+                os.remove(partial)
+            raise
+        total = len(config.trials)
+        done = sum(  # every row is a trial of config (checked above)
+            record_dir is None or (record_dir / f"{i}.rrd").exists() for i in table.rows
+        )
+        todo = _todo(config, table, record_dir)
+        if total - done <= SORT_LIMIT:
+            todo = sorted(todo, key=lambda t: -t.step_time * (t.steps + 0.4))  # longest first
+        bar = Progress(total, done, tty=progress, quiet=quiet, name="sweep")
+        steps_left = config.trials.simulated_steps() * (total - done) / max(total, 1)
+        parallel = "" if executor is not None else f" on {workers} workers"
+        bar.say(
+            f"sweep: {total} trials, {done} already done, {total - done} to run{parallel}: "
+            f"about {_duration(steps_left / (SIM_RATE * workers))} at {SIM_RATE:.0f} sim "
+            "steps/s per worker (refined as trials finish)"
+        )
+        inflight: dict[str, SweepTrial] = {}
 
-        def finished(trial: SweepTrial) -> bool:
-            if trial.trial_id not in table.rows:
-                return False
-            return record_dir is None or (record_dir / f"{trial.trial_id}.rrd").exists()
+        def jobs():
+            for trial in todo:
+                inflight[trial.trial_id] = trial
+                yield trial.trial_id, (trial, None if record_dir is None else str(record_dir))
 
-        todo = [t for t in config.trials if not finished(t)]
-        todo.sort(key=lambda t: -t.step_time * (t.steps + 0.4))  # longest first
-        done = len(config.trials) - len(todo)
-        bar = _Progress(len(config.trials), done, tty=progress, quiet=quiet)
-        futures = {
-            executor.submit(run_one, t, None if record_dir is None else str(record_dir)): t
-            for t in todo
-        }
+        pool = (
+            LocalPool(run_one, workers=workers)
+            if executor is None
+            else FuturesPool(run_one, executor, window=4 * workers)
+        )
         ran = errors = sim_steps = 0
         lost = []
         try:
-            for future in as_completed(futures):
-                trial = futures.pop(future)
-                try:
-                    row = future.result()
-                except Exception as err:  # the worker itself was lost
-                    lost.append(f"{trial.label}: {_one_line(err)}")
-                    bar.update(trial, None)
-                    continue
-                if trial.trial_id in table.rows:  # re-run for its recording only
-                    table.replace(row)
-                else:
+            with pool:
+                for trial_id, outcome in pool.run(jobs()):
+                    trial = inflight.pop(trial_id)
+                    if isinstance(outcome, Lost) and not outcome.known:
+                        lost.append(f"{trial.label}: {outcome.cause}")
+                        bar.update(f"{trial.label}: lost")
+                        continue
+                    row = error_row(trial, outcome.cause) if isinstance(outcome, Lost) else outcome
                     table.append(row)
-                ran += 1
-                errors += row["simulated_verdict"] == "error"
-                sim_steps += row.get("sim_steps") or 0
-                bar.update(trial, row)
-        finally:
+                    ran += 1
+                    errors += row["simulated_verdict"] == "error"
+                    sim_steps += row.get("sim_steps") or 0
+                    left, elapsed = steps_left - sim_steps, time.perf_counter() - start
+                    rate = sim_steps / elapsed
+                    eta = f", about {_duration(left / rate)} left" if sim_steps else ""
+                    bar.update(
+                        f"{trial.label}: {row['analytic_verdict']}/{row['simulated_verdict']}",
+                        eta if left > 0 else "",
+                    )
+        except Interrupted as stop:
             bar.close()
-            for future in futures:
-                future.cancel()
+            raise Stopped(
+                stop.signum,
+                f"stopped by {stop.args[0]}: {len(table.rows)} of {total} trials are in "
+                f"{partial}; run the same command with --resume to finish",
+            ) from None
+        bar.close()
         if not lost:
-            table.rewrite(t.trial_id for t in config.trials)
-        verdicts: dict[tuple[str, str], int] = {}
-        for row in table.rows.values():
-            key = (row["analytic_verdict"], row["simulated_verdict"])
-            verdicts[key] = verdicts.get(key, 0) + 1
+            table.write_finished(final, (t.trial_id for t in config.trials))
+            os.remove(partial)
+        counts = dict(table.counts())
     return SweepSummary(
-        table=table.path,
-        total=len(config.trials),
+        table=final if not lost else partial,
+        total=total,
         resumed=done,
         ran=ran,
         errors=errors,
         lost=tuple(lost),
         sim_steps=sim_steps,
         wall_s=time.perf_counter() - start,
-        verdicts=verdicts,
+        verdicts=counts,
     )
 
 
-class _Progress:
-    """A tqdm bar on a terminal; otherwise a plain line at every tenth of the sweep."""
+def _todo(config: SweepConfig, table: SweepTable, record_dir: Path | None):
+    """The trials of ``config`` still to run, lazily: no row yet, or no recording asked for."""
+    for trial in config.trials:
+        if trial.trial_id not in table.rows or (
+            record_dir is not None and not (record_dir / f"{trial.trial_id}.rrd").exists()
+        ):
+            yield trial
 
-    def __init__(self, total: int, done: int, *, tty: bool, quiet: bool = False):
-        self.total, self.count, self.quiet = total, done, quiet
-        self._next_log = done
-        self._bar = None
-        if quiet:
+
+def _check_trials(table: SweepTable, config: SweepConfig) -> None:
+    """Refuse a table with rows of trials that are not in ``config`` (another sweep's)."""
+    if not table.rows:
+        return
+    stray = set(table.rows)
+    for trial in config.trials:
+        stray.discard(trial.trial_id)
+        if not stray:
             return
-        if tty:
-            from tqdm import tqdm
-
-            self._bar = tqdm(total=total, initial=done, unit="trial", desc="sweep", file=sys.stderr)
-        elif done < total:
-            print(f"sweep: {total - done} of {total} trials to run", file=sys.stderr, flush=True)
-
-    def update(self, trial: SweepTrial, row: dict | None) -> None:
-        self.count += 1
-        verdicts = (
-            "lost" if row is None else f"{row['analytic_verdict']}/{row['simulated_verdict']}"
-        )
-        if self._bar is not None:
-            self._bar.set_postfix_str(f"{trial.label}: {verdicts}", refresh=False)
-            self._bar.update(1)
-        elif not self.quiet and (self.count >= self._next_log or self.count == self.total):
-            print(
-                f"[{self.count}/{self.total}] {trial.label}: {verdicts}",
-                file=sys.stderr,
-                flush=True,
-            )
-            self._next_log = self.count + max(1, self.total // 10)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
+    raise SweepError(
+        f"{table.path}: {len(stray)} rows (e.g. trial_id {min(stray)}) are not trials of "
+        f"{config.source}: another sweep's table, or the sweep file changed; use another --out"
+    )

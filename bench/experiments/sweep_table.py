@@ -1,17 +1,31 @@
-"""The sweep table: one CSV row per finished trial, appended whole, so a killed sweep resumes.
+"""The sweep table: one CSV line per finished trial, appended whole, so a killed sweep resumes.
 
-Atomicity: the file is opened once with ``O_APPEND``; the header is written when
-the file is created (or found empty), and each row is formatted completely and
-written with a single ``os.write``, so a reader or a crash sees whole rows only
-(a kernel append is all-or-nothing for a small write). The one exception, a
-crash of the machine inside that write, can leave a last line without its
-newline; opening the table again cuts that torn line off, and its trial runs
-again. An exclusive ``flock`` keeps a second sweep from writing the same file
-at the same time.
+Two files in a run directory: ``sweep.partial.csv`` while a run is going (and
+after it was killed), ``sweep.csv`` once every trial is done. The partial table
+is opened once with ``O_APPEND``; its header is written when it is created, and
+each row is formatted completely and written with a single ``os.write``, so a
+reader or a crash sees whole lines only (a kernel append is all-or-nothing for
+a small write). The one exception, a crash of the machine inside that write,
+can leave a last line without its newline; opening the partial table again
+cuts that torn line off, and its trial runs again. A row appended again for the
+same ``trial_id`` (a re-run for a missing recording) replaces the earlier one.
+An exclusive ``flock`` keeps a second sweep from writing the same file at the
+same time; it lives with this process's open file (sweep workers are spawned,
+so they hold no copy of it).
 
-Values: floats are written with ``repr`` (exact round trip, ``nan`` for
-not-a-number), booleans as ``True``/``False``, a missing value as an empty
-field; pandas and polars read the file as it is.
+A file that is not such a table (binary, not UTF-8, no header, other columns,
+a line of the wrong width, a verdict that is not a verdict) is refused in one
+line naming the file and what is wrong; it is never truncated or overwritten.
+
+Values, chosen so that regenerating a table from the same trials gives the
+same bytes: the inputs (``step_time``, ``slope_deg``, ``friction``) as written
+in the sweep file (Python's shortest round-trip ``repr``); each outcome at a
+fixed precision well above floating-point noise (last-bit differences between
+BLAS builds or summation orders cannot reach it) and below anything physical:
+lengths in mm to 0.1 µm (4 decimals), times to 0.1 ms, angles to 1e-5 deg,
+torques to 1 µN·m, work to 0.1 µJ, ratios and fractions to 1e-6. ``nan`` is
+not-a-number, booleans are ``True``/``False``, a missing value an empty field;
+pandas and polars read the file as it is.
 """
 
 from __future__ import annotations
@@ -20,7 +34,9 @@ import contextlib
 import csv
 import fcntl
 import io
+import math
 import os
+from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -58,36 +74,134 @@ COLUMNS = (
     "work_J",  # planned joint work, Plan.work.sum()
     "standing_fraction",
     "sim_steps",
-    "wall_s",  # plan + simulation + comparison, in the worker
-    "error",  # the one-line message of a trial that raised, else empty
+    "error",  # the one-line message of a trial that raised or killed its worker, else empty
 )
+ANALYTIC_VERDICTS = ("stable", "zmp_outside", "error")
+SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
+DECIMALS = {  # outcome columns: digits after the point (module doc)
+    "first_event_time_s": 4,
+    "zmp_rms_mm": 4,
+    "zmp_max_mm": 4,
+    "lipm_rms_mm": 4,
+    "cop_lipm_rms_mm": 4,
+    "analytic_min_margin_mm": 4,
+    "simulated_min_margin_mm": 4,
+    "max_friction_ratio": 6,
+    "simulated_max_friction_ratio": 6,
+    "tracking_rms_deg": 5,
+    "peak_torque_planned_Nm": 6,
+    "peak_torque_simulated_Nm": 6,
+    "work_J": 7,
+    "standing_fraction": 6,
+}
+HEADER = (",".join(COLUMNS) + "\n").encode()
+_ID_CHARS = frozenset("0123456789abcdef")
 
 
 def format_row(row: dict) -> bytes:
     """One complete CSV line (newline included) of ``row``'s ``COLUMNS``."""
     buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow(_text(row.get(c)) for c in COLUMNS)
+    csv.writer(buffer, lineterminator="\n").writerow(text(c, row.get(c)) for c in COLUMNS)
     return buffer.getvalue().encode()
 
 
-def _text(value) -> str:
+def text(column: str, value) -> str:
+    """``value`` of ``column`` as written in the table (module doc)."""
     if value is None:
         return ""
     if isinstance(value, float):  # np.float64 too: its repr is not a plain number
-        return repr(float(value))
+        value = float(value)
+        if column not in DECIMALS or not math.isfinite(value):
+            return repr(value)
+        out = f"{value:.{DECIMALS[column]}f}"
+        return out[1:] if out.startswith("-") and not out.strip("-0.") else out  # no "-0.0000"
     return " ".join(str(value).split()) if isinstance(value, str) else str(value)
 
 
+def parse(data: bytes, path: Path, *, torn_ok: bool = False) -> tuple[dict[str, bytes], int]:
+    """The rows of a table (by ``trial_id``, last one wins) and the length of its whole lines.
+
+    Args:
+        data: The file's contents.
+        path: For messages.
+        torn_ok: Accept a last line without its newline (left out of the rows).
+
+    Raises:
+        SweepError: ``data`` is not a sweep table (module doc), naming what is wrong.
+    """
+    where = f"{path}: not a sweep table"
+    hint = "; move it away or choose another --out"
+    try:
+        data.decode()
+    except UnicodeDecodeError as err:
+        raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
+    if not data.startswith(HEADER):
+        first = data.split(b"\n", 1)[0]
+        what = (
+            "no header line"
+            if b"\n" not in data
+            else f"its header is not that of these {len(COLUMNS)} columns (another version?)"
+            if first.startswith(b"trial_id,")
+            else "its first line is not the header"
+        )
+        raise SweepError(f"{where} ({what}){hint}")
+    whole = data.rfind(b"\n") + 1
+    if whole < len(data) and not torn_ok:
+        raise SweepError(f"{where} (its last line has no newline: a torn write?){hint}")
+    rows: dict[str, bytes] = {}
+    lines = data[len(HEADER) : whole].split(b"\n")[:-1]
+    for number, line in enumerate(lines, start=2):
+        fields = next(csv.reader([line.decode()]), [])
+        if len(fields) != len(COLUMNS):
+            raise SweepError(f"{path}: line {number} has {len(fields)} fields, not {len(COLUMNS)}")
+        row = dict(zip(COLUMNS, fields, strict=True))
+        trial_id = row["trial_id"]
+        if len(trial_id) != 12 or not set(trial_id) <= _ID_CHARS:
+            raise SweepError(f"{path}: line {number}: trial_id {trial_id!r} is not a trial id")
+        for column, allowed in (
+            ("analytic_verdict", ANALYTIC_VERDICTS),
+            ("simulated_verdict", SIMULATED_VERDICTS),
+        ):
+            if row[column] not in allowed:
+                raise SweepError(
+                    f"{path}: line {number}: {column} {row[column]!r} is not one of "
+                    + ", ".join(allowed)
+                )
+        rows[trial_id] = line + b"\n"
+    return rows, whole
+
+
+def read_rows(path: str | Path) -> dict[str, bytes]:
+    """The rows of a finished table (``parse``), by ``trial_id``."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise SweepError(f"{path}: is a directory, not a sweep table") from None
+    except OSError as err:
+        raise SweepError(f"{path}: cannot read ({err.strerror})") from None
+    return parse(data, path)[0]
+
+
+def verdicts(line: bytes) -> tuple[str, str]:
+    """(analytic, simulated) verdict of one table line."""
+    fields = next(csv.reader([line.decode()]))
+    return fields[COLUMNS.index("analytic_verdict")], fields[COLUMNS.index("simulated_verdict")]
+
+
 class SweepTable:
-    """An open ``sweep.csv``: the rows already there (by ``trial_id``) and an appender.
+    """An open partial table: the rows already there (by ``trial_id``) and an appender.
 
     Use ``SweepTable.open(path)`` as a context manager.
+
+    Attributes:
+        path: The file.
+        created: True when this open made the file (it held no row before).
+        rows: trial_id -> the row's line (bytes, newline included).
     """
 
-    def __init__(self, path: Path, fd: int, rows: dict[str, dict[str, str]]):
-        self.path = path
-        self._fd = fd
-        self.rows = rows  # trial_id -> row (strings as read, or as appended)
+    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool):
+        self.path, self._fd, self.rows, self.created = path, fd, rows, created
 
     @classmethod
     @contextlib.contextmanager
@@ -95,8 +209,7 @@ class SweepTable:
         """Create (with its header) or reopen the table at ``path``, locked for this process.
 
         Raises:
-            SweepError: another sweep holds the file, or it is not a sweep table
-                of these columns.
+            SweepError: another sweep holds the file, or it is not a sweep table.
         """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -106,59 +219,45 @@ class SweepTable:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 raise SweepError(f"{path}: another sweep is writing this table") from None
-            rows = _read_rows(fd, path)
-            yield cls(path, fd, rows)
+            size = os.fstat(fd).st_size
+            if size == 0:
+                os.write(fd, HEADER)
+                rows, created = {}, True
+            else:
+                rows, whole = parse(os.pread(fd, size, 0), path, torn_ok=True)
+                if whole < size:  # our own torn last line (module doc): its trial runs again
+                    os.truncate(fd, whole)
+                created = False
+            yield cls(path, fd, rows, created)
         finally:
             os.close(fd)
 
     def append(self, row: dict) -> None:
         """Append one finished trial's row: a single write of the whole line."""
-        line = format_row(row)
+        self.append_line(format_row(row))
+
+    def append_line(self, line: bytes) -> None:
+        """Append one formatted line (``format_row``) whole."""
         if os.write(self._fd, line) != len(line):  # only on a full disk
             raise SweepError(f"{self.path}: short write (disk full?)")
-        self.rows[row["trial_id"]] = {c: _text(row.get(c)) for c in COLUMNS}
+        self.rows[line.split(b",", 1)[0].decode()] = line
 
-    def replace(self, row: dict) -> None:
-        """Take ``row`` in place of the one with its ``trial_id``, on the next ``rewrite``."""
-        self.rows[row["trial_id"]] = {c: _text(row.get(c)) for c in COLUMNS}
+    def counts(self) -> Counter:
+        """(analytic, simulated) verdict -> rows."""
+        return Counter(verdicts(line) for line in self.rows.values())
 
-    def rewrite(self, order: Iterable[str]) -> None:
-        """Replace the file by its rows in ``order`` (ids first, the rest after), atomically."""
-        ids = list(dict.fromkeys([i for i in order if i in self.rows] + list(self.rows)))
-        with atomic_path(self.path) as tmp:
-            with open(tmp, "w", newline="") as f:
-                writer = csv.writer(f, lineterminator="\n")
-                writer.writerow(COLUMNS)
-                writer.writerows([self.rows[i][c] for c in COLUMNS] for i in ids)
+    def write_finished(self, path: str | Path, order: Iterable[str]) -> None:
+        """Write the rows, ids of ``order`` first, to ``path`` whole (atomically)."""
+        seen = {}
+        for trial_id in order:
+            if trial_id in self.rows:
+                seen[trial_id] = self.rows[trial_id]
+        lines = list(seen.values()) + [v for k, v in self.rows.items() if k not in seen]
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                f.write(HEADER)
+                f.writelines(lines)
             os.chmod(tmp, 0o644)
-
-
-def _read_rows(fd: int, path: Path) -> dict[str, dict[str, str]]:
-    """Rows of an existing table; writes the header into a new (empty) one."""
-    size = os.fstat(fd).st_size
-    header = format_row(dict(zip(COLUMNS, COLUMNS, strict=True)))
-    if size == 0:
-        os.write(fd, header)
-        return {}
-    data = os.pread(fd, size, 0)
-    if not data.endswith(b"\n"):  # a torn last line (crash inside a write): drop it
-        os.truncate(fd, data.rfind(b"\n") + 1)
-        data = data[: data.rfind(b"\n") + 1]
-        if not data:
-            os.write(fd, header)
-            return {}
-    lines = list(csv.reader(io.StringIO(data.decode())))
-    if tuple(lines[0]) != COLUMNS:
-        raise SweepError(
-            f"{path}: not a sweep table of this version (its columns differ); choose another --out"
-        )
-    rows = {}
-    for number, fields in enumerate(lines[1:], start=2):
-        if len(fields) != len(COLUMNS):
-            raise SweepError(f"{path}: line {number} has {len(fields)} fields, not {len(COLUMNS)}")
-        row = dict(zip(COLUMNS, fields, strict=True))
-        rows[row["trial_id"]] = row
-    return rows
 
 
 def read_table(path: str | Path) -> list[dict]:
@@ -171,11 +270,11 @@ def read_table(path: str | Path) -> list[dict]:
     out = []
     for row in rows:
         typed = {}
-        for key, text in row.items():
+        for key, value in row.items():
             try:
-                typed[key] = float(text)
+                typed[key] = float(value)
             except ValueError:
-                typed[key] = text
+                typed[key] = value
         typed["mass_scale"] = "" if row["mass_scale"] == "none" else row["mass_scale"]
         out.append(typed)
     return out

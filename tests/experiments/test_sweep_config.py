@@ -100,7 +100,7 @@ def test_robot_paths_are_relative_to_the_sweep_file(tmp_path, short_robot):
     (tmp_path / "s.toml").write_text('[grid]\nrobot = ["short.toml", "default"]\n')
     config = load_sweep(tmp_path / "s.toml")
     assert [t.robot for t in config.trials] == ["short.toml", "default"]
-    assert config.trials[0].spec.thigh == 0.05 and config.trials[1].spec.thigh == 0.111
+    assert config.trials[0].spec.shank == 0.01 and config.trials[1].spec.shank == 0.111
 
 
 def test_shipped_sweeps_parse():
@@ -134,7 +134,7 @@ def test_shipped_sweeps_parse():
         ({"steps": 2}, "no trials"),
         ({"grid": {}}, "s.toml: grid is empty: give at least one list, e.g. step_time = [1.0]"),
         ({"grid": [{"slope": [0]}, {}]}, "grid[1] is empty"),
-        ({"grid": {"step_time": [0.005]}}, "dt 0.001 s: must lie in"),
+        ({"grid": {"step_time": [0.005]}}, "step time 0.005 s: must lie in [0.01, 60] s"),
     ],
 )
 def test_bad_sweep_files_are_refused_naming_the_key(data, message):

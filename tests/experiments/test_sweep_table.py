@@ -1,0 +1,86 @@
+"""The sweep table: whole-line appends, fixed-precision values, refusal of what is not ours."""
+
+import random
+
+import pytest
+
+from bench.experiments.sweep_config import SweepError
+from bench.experiments.sweep_table import COLUMNS, DECIMALS, HEADER, SweepTable, format_row, text
+
+ID = "0123456789ab"
+
+
+def _row(**values) -> dict:
+    return {"trial_id": ID, "analytic_verdict": "stable", "simulated_verdict": "tip"} | values
+
+
+def test_table_appends_whole_rows_and_survives_a_torn_line(tmp_path):
+    path = tmp_path / "sweep.partial.csv"
+    with SweepTable.open(path) as table:
+        assert table.rows == {} and table.created
+        table.append(_row(friction=0.1 + 0.2, error='says "no", twice\nover lines'))
+    with SweepTable.open(path) as table:
+        assert not table.created and list(table.rows) == [ID]
+        line = table.rows[ID]
+    assert b"0.30000000000000004" in line  # an input keeps every digit
+    assert b'"says ""no"", twice over lines"' in line
+    with open(path, "ab") as f:  # a crash inside a write: the last line has no newline
+        f.write(b"fedcba987654,0.5,0.0")
+    with SweepTable.open(path) as table:
+        assert list(table.rows) == [ID]
+    assert path.read_bytes().endswith(line)
+
+
+def test_a_second_writer_is_refused(tmp_path):
+    path = tmp_path / "sweep.partial.csv"
+    with SweepTable.open(path), pytest.raises(SweepError, match="another sweep"):
+        with SweepTable.open(path):
+            pass
+
+
+def test_outcomes_are_written_at_a_fixed_precision():
+    assert text("zmp_rms_mm", 1.39e-13) == text("zmp_rms_mm", 1.4e-13) == "0.0000"
+    assert text("analytic_min_margin_mm", -1e-9) == "0.0000"  # never "-0.0000"
+    assert text("work_J", 0.123456789) == "0.1234568"
+    assert text("zmp_max_mm", float("nan")) == "nan"
+    assert text("step_time", 0.45) == "0.45"
+    rng = random.Random(0)
+    for column in DECIMALS:
+        for _ in range(200):
+            value = rng.uniform(-1e3, 1e3) * 10 ** rng.randint(-6, 0)
+            written = text(column, value)
+            assert text(column, float(written)) == written  # a re-read value prints the same
+            assert abs(float(written) - value) <= 0.51 * 10 ** -DECIMALS[column]
+
+
+CORRUPT = {
+    "binary": (bytes(range(256)) * 16, "not UTF-8 text"),
+    "binary without newline": (b"\x00\x01" * 2048, "no header line"),
+    "not UTF-8": (HEADER + b"0123456789ab,\xff\xfe\n", "not UTF-8 text: byte 416"),
+    "text without newline": (b"a" * 4096, "no header line"),
+    "no header": (format_row(_row()), "its first line is not the header"),
+    "other columns": (b"a,b\n1,2\n", "its first line is not the header"),
+    "other version": (b"trial_id,b\n1,2\n", "its header is not that of these 29 columns"),
+    "short row": (HEADER + b"0123456789ab,1.0\n", "line 2 has 2 fields, not"),
+    "bad id": (HEADER + format_row(_row(trial_id="abc")), "trial_id 'abc' is not a trial id"),
+    "banana": (
+        HEADER + format_row(_row(simulated_verdict="banana")),
+        "line 2: simulated_verdict 'banana' is not one of stable, slip, tip, fall, diverged",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", CORRUPT)
+def test_what_is_not_a_sweep_table_is_refused_and_left_alone(tmp_path, name):
+    data, message = CORRUPT[name]
+    path = tmp_path / "sweep.partial.csv"
+    path.write_bytes(data)
+    with pytest.raises(SweepError) as err, SweepTable.open(path):
+        pass
+    assert str(path) in str(err.value) and message in str(err.value)
+    assert "\n" not in str(err.value)
+    assert path.read_bytes() == data
+
+
+def test_columns_hold_no_wall_time():
+    assert "wall_s" not in COLUMNS  # it differs run to run: the table would never be stable
