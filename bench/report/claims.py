@@ -5,6 +5,11 @@
 needs more than the sweep holds (a trace, a torque split, the GA cases) it
 plans or plays the few extra trials itself, or reads the GA results written by
 ``slopewalk optimize`` into ``results/optimize/``.
+
+Numbers are written at fixed precision (never ``%g`` of a computed value, whose
+digits follow floating-point noise: a ZMP shift of 1.39e-13 mm is 0.0000 mm), and
+the sweep's values come from ``sweep.csv`` as written (``sweep_table.py``), so a
+regenerated report has the same bytes when nothing changed.
 """
 
 from __future__ import annotations
@@ -142,7 +147,7 @@ def mass_claims(rows, spec: RobotSpec) -> list[dict]:
             _claim(
                 claim,
                 paper,
-                f"max ZMP shift {shift:.3g} mm; min margin {plan.margin.min() * 1e3:.1f} mm "
+                f"max ZMP shift {shift:.4f} mm; min margin {plan.margin.min() * 1e3:.1f} mm "
                 f"(nominal {base.margin.min() * 1e3:.1f} mm)",
                 sim_text
                 + (

@@ -40,3 +40,10 @@ def test_sweep_report_writes_claims_and_figures(tmp_path):
     assert len(rows) >= 7  # header + one row per claim
     assert all(line.count("|") == 7 for line in rows)  # no stray '|' inside a cell
     assert not list(tmp_path.glob("*.part"))
+
+
+def test_a_zero_zmp_shift_is_written_as_zero_whatever_the_rounding_noise(spec):
+    from bench.report.claims import mass_claims
+
+    heavier = mass_claims([], spec)[0]  # 10x every mass: the ZMP moves by rounding noise only
+    assert heavier["analytic"].startswith("max ZMP shift 0.0000 mm;")
