@@ -261,7 +261,8 @@ def run_sweep(
     final, partial = out_dir / TABLE_NAME, out_dir / PARTIAL_NAME
     record_dir = out_dir / RECORDINGS_DIR if record else None
     workers = workers or os.cpu_count() or 1
-    finished = read_rows(final) if final.exists() else {}  # a corrupt one is refused here
+    # a table that is not ours is refused here; one of the previous version may be replaced
+    finished = read_rows(final, previous_ok=resume is not True) if final.exists() else {}
     with interruptible(), SweepTable.open(partial) as table:
         try:
             if not table.created and resume is False:

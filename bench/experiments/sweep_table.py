@@ -16,6 +16,8 @@ so they hold no copy of it).
 A file that is not such a table (binary, not UTF-8, no header, other columns,
 a line of the wrong width, a verdict that is not a verdict) is refused in one
 line naming the file and what is wrong; it is never truncated or overwritten.
+The one exception: a finished table of the previous version (its columns had
+a ``wall_s``), which a fresh run replaces (``--resume`` refuses it).
 
 Values, chosen so that regenerating a table from the same trials gives the
 same bytes: the inputs (``step_time``, ``slope_deg``, ``friction``) as written
@@ -95,6 +97,8 @@ DECIMALS = {  # outcome columns: digits after the point (module doc)
     "standing_fraction": 6,
 }
 HEADER = (",".join(COLUMNS) + "\n").encode()
+PREVIOUS_COLUMNS = (*COLUMNS[:-1], "wall_s", "error")  # before fixed precision: a wall time
+PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
 _ID_CHARS = frozenset("0123456789abcdef")
 
 
@@ -118,13 +122,17 @@ def text(column: str, value) -> str:
     return " ".join(str(value).split()) if isinstance(value, str) else str(value)
 
 
-def parse(data: bytes, path: Path, *, torn_ok: bool = False) -> tuple[dict[str, bytes], int]:
+def parse(
+    data: bytes, path: Path, *, torn_ok: bool = False, previous_ok: bool = False
+) -> tuple[dict[str, bytes], int]:
     """The rows of a table (by ``trial_id``, last one wins) and the length of its whole lines.
 
     Args:
         data: The file's contents.
         path: For messages.
         torn_ok: Accept a last line without its newline (left out of the rows).
+        previous_ok: Accept a table of ``PREVIOUS_COLUMNS`` too (checked the
+            same way), which a fresh run may replace; its rows are not returned.
 
     Raises:
         SweepError: ``data`` is not a sweep table (module doc), naming what is wrong.
@@ -135,11 +143,17 @@ def parse(data: bytes, path: Path, *, torn_ok: bool = False) -> tuple[dict[str, 
         data.decode()
     except UnicodeDecodeError as err:
         raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
-    if not data.startswith(HEADER):
+    columns = COLUMNS
+    if previous_ok and data.startswith(PREVIOUS_HEADER):
+        columns = PREVIOUS_COLUMNS
+    elif not data.startswith(HEADER):
         first = data.split(b"\n", 1)[0]
         what = (
             "no header line"
             if b"\n" not in data
+            else "written by an older slopewalk (it has a wall_s column): run without --resume "
+            "to replace it"
+            if data.startswith(PREVIOUS_HEADER)
             else f"its header is not that of these {len(COLUMNS)} columns (another version?)"
             if first.startswith(b"trial_id,")
             else "its first line is not the header"
@@ -149,12 +163,12 @@ def parse(data: bytes, path: Path, *, torn_ok: bool = False) -> tuple[dict[str, 
     if whole < len(data) and not torn_ok:
         raise SweepError(f"{where} (its last line has no newline: a torn write?){hint}")
     rows: dict[str, bytes] = {}
-    lines = data[len(HEADER) : whole].split(b"\n")[:-1]
+    lines = data[data.index(b"\n") + 1 : whole].split(b"\n")[:-1]
     for number, line in enumerate(lines, start=2):
         fields = next(csv.reader([line.decode()]), [])
-        if len(fields) != len(COLUMNS):
-            raise SweepError(f"{path}: line {number} has {len(fields)} fields, not {len(COLUMNS)}")
-        row = dict(zip(COLUMNS, fields, strict=True))
+        if len(fields) != len(columns):
+            raise SweepError(f"{path}: line {number} has {len(fields)} fields, not {len(columns)}")
+        row = dict(zip(columns, fields, strict=True))
         trial_id = row["trial_id"]
         if len(trial_id) != 12 or not set(trial_id) <= _ID_CHARS:
             raise SweepError(f"{path}: line {number}: trial_id {trial_id!r} is not a trial id")
@@ -168,10 +182,10 @@ def parse(data: bytes, path: Path, *, torn_ok: bool = False) -> tuple[dict[str, 
                     + ", ".join(allowed)
                 )
         rows[trial_id] = line + b"\n"
-    return rows, whole
+    return (rows if columns is COLUMNS else {}), whole
 
 
-def read_rows(path: str | Path) -> dict[str, bytes]:
+def read_rows(path: str | Path, *, previous_ok: bool = False) -> dict[str, bytes]:
     """The rows of a finished table (``parse``), by ``trial_id``."""
     path = Path(path)
     try:
@@ -180,7 +194,7 @@ def read_rows(path: str | Path) -> dict[str, bytes]:
         raise SweepError(f"{path}: is a directory, not a sweep table") from None
     except OSError as err:
         raise SweepError(f"{path}: cannot read ({err.strerror})") from None
-    return parse(data, path)[0]
+    return parse(data, path, previous_ok=previous_ok)[0]
 
 
 def verdicts(line: bytes) -> tuple[str, str]:

@@ -15,7 +15,7 @@ import pytest
 from bench.cli import main
 from bench.experiments.sweep import SweepSummary, run_one, run_sweep
 from bench.experiments.sweep_config import SWEEPS_DIR, load_sweep, sweep_from_dict
-from bench.experiments.sweep_table import COLUMNS, HEADER, format_row, parse
+from bench.experiments.sweep_table import COLUMNS, HEADER, PREVIOUS_HEADER, format_row, parse
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
 SWEEP = [sys.executable, "-m", "bench.cli", "sweep"]
@@ -328,6 +328,21 @@ def test_a_table_that_is_not_a_sweep_table_is_refused_and_kept(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and str(tmp_path / name) in err
     assert [p.name for p in tmp_path.iterdir()] == [name] and (tmp_path / name).read_bytes() == data
+
+
+def test_a_table_of_the_previous_version_is_replaced_by_a_fresh_run_only(
+    tmp_path, capsys, reference
+):
+    rows, data = reference
+    old = PREVIOUS_HEADER + b"".join(
+        line[: line.rindex(b",")] + b",0.5" + line[line.rindex(b",") :] for line in rows.values()
+    )
+    (tmp_path / "sweep.csv").write_bytes(old)
+    assert main(["sweep", str(SMOKE), "--out", str(tmp_path), "--resume"]) == 2
+    assert "written by an older slopewalk" in capsys.readouterr().err
+    assert (tmp_path / "sweep.csv").read_bytes() == old
+    assert main(["sweep", str(SMOKE), "--workers", "1", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "sweep.csv").read_bytes() == data
 
 
 def test_rows_of_another_sweep_are_refused(tmp_path, capsys, reference):
