@@ -1,13 +1,26 @@
 import numpy as np
 import pytest
 
-from planner.spec import load_spec
+from planner.spec import default_spec_path, load_spec
 
 
 @pytest.fixture(scope="session")
 def spec():
     """The paper's Bioloid-scale biped."""
     return load_spec()
+
+
+@pytest.fixture
+def short_robot(tmp_path):
+    """``tmp_path/short.toml``: the paper's biped with a 1 cm shank: no plan reaches its hips.
+
+    The nominal hip-ankle distance, 0.757 (L1 + L2) = 0.092 m, is shorter than the
+    leg folds (L1 − L2 = 0.101 m), so the hip target is out of reach.
+    """
+    text = default_spec_path().read_text().replace("\nshank = 0.111", "\nshank = 0.01")
+    path = tmp_path / "short.toml"
+    path.write_text(text)
+    return path
 
 
 def away_from_phase_changes(plan, margin: int = 3) -> np.ndarray:
