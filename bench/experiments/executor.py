@@ -24,13 +24,13 @@ Two ways to run them:
   ``distributed.Client``'s; at most ``window`` jobs are submitted at a time.
   An executor cannot say which job a lost worker held, so a failed future
   comes back as a ``Lost`` with ``known=False``: the caller should not blame
-  the job for it.
+  the job for it. (Dask's ``KilledWorker``, raised for a task that its
+  workers died running several times over, is the exception: ``known=True``.)
 
 ``interruptible()`` turns SIGTERM (and SIGINT) into an ``Interrupted``
 exception in the main thread, so a terminated run stops like a Ctrl-C one:
 the caller keeps what it has written and exits non-zero with one line.
-``Progress`` is the progress display of the house: a tqdm bar on a terminal,
-a plain line at every tenth otherwise, quiet in tests.
+The progress display that goes with it is ``progress.py``.
 """
 
 from __future__ import annotations
@@ -42,7 +42,6 @@ import multiprocessing
 import os
 import pickle
 import signal
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -361,46 +360,6 @@ class FuturesPool:
                 try:
                     yield key, future.result()
                 except Exception as err:
-                    yield key, Lost(one_line(err), known=False)
-
-
-class Progress:
-    """A tqdm bar on a terminal; otherwise a plain line at every tenth of the jobs.
-
-    Args:
-        total: Jobs in all; done: already finished before this run.
-        tty: Draw a bar (stderr is a terminal); quiet: print nothing.
-        name: Prefix of the lines ("sweep").
-    """
-
-    def __init__(self, total: int, done: int, *, tty: bool, quiet: bool = False, name="jobs"):
-        self.total, self.count, self.quiet, self.name = total, done, quiet, name
-        self._next_log = done + max(1, total // 10)
-        self._bar = None
-        if tty and not quiet:
-            from tqdm import tqdm
-
-            self._bar = tqdm(total=total, initial=done, unit="trial", desc=name, file=sys.stderr)
-
-    def say(self, line: str) -> None:
-        """One line for the user (above the bar, if there is one)."""
-        if self.quiet:
-            return
-        if self._bar is not None:
-            self._bar.write(line, file=sys.stderr)
-        else:
-            print(line, file=sys.stderr, flush=True)
-
-    def update(self, text: str, extra: str = "") -> None:
-        """One job ended; ``text`` says which and how; ``extra`` is appended to log lines."""
-        self.count += 1
-        if self._bar is not None:
-            self._bar.set_postfix_str(text, refresh=False)
-            self._bar.update(1)
-        elif not self.quiet and (self.count >= self._next_log or self.count == self.total):
-            self.say(f"[{self.count}/{self.total}] {text}{extra}")
-            self._next_log = self.count + max(1, self.total // 10)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
+                    # Dask's KilledWorker names the task whose workers kept dying: that one's fault
+                    known = type(err).__name__ == "KilledWorker"
+                    yield key, Lost(one_line(err), known=known)

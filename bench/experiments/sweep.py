@@ -49,10 +49,10 @@ from bench.experiments.executor import (
     Interrupted,
     LocalPool,
     Lost,
-    Progress,
     interruptible,
     one_line,
 )
+from bench.experiments.progress import Progress
 from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
 from bench.experiments.sweep_table import SweepTable, read_rows
 
@@ -287,11 +287,14 @@ def run_sweep(
             todo = sorted(todo, key=lambda t: -t.step_time * (t.steps + 0.4))  # longest first
         bar = Progress(total, done, tty=progress, quiet=quiet, name="sweep")
         steps_left = config.trials.simulated_steps() * (total - done) / max(total, 1)
-        parallel = "" if executor is not None else f" on {workers} workers"
+        if executor is None:
+            where = f" on {workers} workers"
+            estimate = f"about {_duration(steps_left / (SIM_RATE * workers))}"
+        else:
+            where, estimate = "", f"about {_duration(steps_left / SIM_RATE)} of worker time"
         bar.say(
-            f"sweep: {total} trials, {done} already done, {total - done} to run{parallel}: "
-            f"about {_duration(steps_left / (SIM_RATE * workers))} at {SIM_RATE:.0f} sim "
-            "steps/s per worker (refined as trials finish)"
+            f"sweep: {total} trials, {done} already done, {total - done} to run{where}: "
+            f"{estimate} at {SIM_RATE:.0f} sim steps/s per worker (refined as trials finish)"
         )
         inflight: dict[str, SweepTrial] = {}
 
@@ -325,7 +328,7 @@ def run_sweep(
                     eta = f", about {_duration(left / rate)} left" if sim_steps else ""
                     bar.update(
                         f"{trial.label}: {row['analytic_verdict']}/{row['simulated_verdict']}",
-                        eta if left > 0 else "",
+                        eta if left > 0 and done + ran < total else "",
                     )
         except Interrupted as stop:
             bar.close()

@@ -227,12 +227,8 @@ class SweepTable:
         """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(path, os.O_RDWR | os.O_APPEND | os.O_CREAT, 0o644)
+        fd = _locked(path)
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                raise SweepError(f"{path}: another sweep is writing this table") from None
             size = os.fstat(fd).st_size
             if size == 0:
                 os.write(fd, HEADER)
@@ -272,6 +268,28 @@ class SweepTable:
                 f.write(HEADER)
                 f.writelines(lines)
             os.chmod(tmp, 0o644)
+
+
+def _locked(path: Path) -> int:
+    """An ``O_APPEND`` descriptor of ``path`` (created if missing) holding its exclusive flock.
+
+    If a finishing sweep removed the file between our open and our lock, the
+    lock is on a file no one will read: open the new one instead.
+    """
+    for _ in range(3):
+        fd = os.open(path, os.O_RDWR | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise SweepError(f"{path}: another sweep is writing this table") from None
+        try:
+            if os.stat(path).st_ino == os.fstat(fd).st_ino:
+                return fd
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    raise SweepError(f"{path}: removed as it was opened, three times (another sweep finishing?)")
 
 
 def read_table(path: str | Path) -> list[dict]:
