@@ -107,6 +107,10 @@ def load_sweep(path: str | Path | None = None) -> SweepConfig:
         raise SweepError(f"sweep file {str(path)!r}: no such file") from None
     except IsADirectoryError:
         raise SweepError(f"sweep file {str(path)!r}: is a directory, not a sweep TOML") from None
+    except UnicodeDecodeError as err:
+        raise SweepError(
+            f"sweep file {str(path)!r}: not UTF-8 text (byte {err.start}), so not TOML"
+        ) from None
     except tomllib.TOMLDecodeError as err:
         raise SweepError(f"sweep file {str(path)!r}: not valid TOML ({err})") from None
     return sweep_from_dict(data, base_dir=path.parent, source=str(path))

@@ -369,6 +369,7 @@ def test_rows_of_another_sweep_are_refused(tmp_path, capsys, reference):
         ("[grid]\n", [], "grid is empty"),
         (None, [], "no such file"),
         ("DIR", [], "is a directory, not a sweep TOML"),
+        (b"\x00\xff\xfe binary", [], "not UTF-8 text (byte 1), so not TOML"),
         ("[[trial]]\n", ["--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
         ("[[trial]]\n", ["--cluster", "localhost"], "not a scheduler address like tcp://"),
     ],
@@ -377,6 +378,8 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, config, flag
     path = tmp_path / "s.toml"
     if config == "DIR":
         path.mkdir()
+    elif isinstance(config, bytes):
+        path.write_bytes(config)
     elif config is not None:
         path.write_text(config)
     out = tmp_path / "out"
