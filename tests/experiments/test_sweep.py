@@ -75,6 +75,19 @@ def _workers(pid: int) -> list[int]:
     return out
 
 
+def _busy_worker(pid: int, timeout: float = 10) -> int:
+    """A worker of ``pid`` that is running (state R: in a trial, not waiting on its pipe)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for worker in _workers(pid):
+            with contextlib.suppress(OSError):
+                stat = Path(f"/proc/{worker}/stat").read_text()
+                if stat[stat.rindex(")") + 2] == "R":
+                    return worker
+        time.sleep(0.001)
+    raise AssertionError("no worker is running a trial")
+
+
 @contextlib.contextmanager
 def _started(command: list[str], tmp_path: Path):
     """``command`` running in its own session, stderr to a file; killed whole on the way out."""
@@ -208,9 +221,8 @@ def test_a_killed_worker_costs_only_its_trial(tmp_path):
     out = tmp_path / "out"
     command = [*SWEEP, str(config), "--workers", "2", "--out", str(out)]
     with _started(command, tmp_path) as (proc, err):
-        _wait_rows(out / "sweep.partial.csv", 1, proc)
-        victim = _workers(proc.pid)[0]
-        os.kill(victim, signal.SIGKILL)
+        _wait_rows(out / "sweep.partial.csv", 2, proc)  # both workers are up
+        os.kill(_busy_worker(proc.pid), signal.SIGKILL)
         assert proc.wait(timeout=120) == 0, err.read_text()
     rows = [line.decode() for line in _table(out / "sweep.csv").values()]
     assert len(rows) == 5
