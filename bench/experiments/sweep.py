@@ -330,12 +330,18 @@ def run_sweep(
                         f"{trial.label}: {row['analytic_verdict']}/{row['simulated_verdict']}",
                         eta if left > 0 and done + ran < total else "",
                     )
-        except Interrupted as stop:
+        except BaseException as err:
             bar.close()
+            if table.created and not table.rows:  # nothing of ours to keep: leave no file
+                os.remove(partial)
+            if not isinstance(err, Interrupted):
+                raise
             raise Stopped(
-                stop.signum,
-                f"stopped by {stop.args[0]}: {len(table.rows)} of {total} trials are in "
-                f"{partial}; run the same command with --resume to finish",
+                err.signum,
+                f"stopped by {err.args[0]}: {len(table.rows)} of {total} trials are in "
+                f"{partial}; run the same command with --resume to finish"
+                if table.rows
+                else f"stopped by {err.args[0]} before any trial finished; nothing written",
             ) from None
         bar.close()
         if not lost:

@@ -255,6 +255,8 @@ def test_a_million_trial_grid_says_its_size_at_once_and_stops_on_ctrl_c(tmp_path
     assert first.startswith("sweep: 1000000 trials, 0 already done, 1000000 to run on 1 workers")
     assert " h at " in first  # the estimated time, before any trial
     assert code == 130 and "slopewalk: stopped by SIGINT" in err.read_text().splitlines()[-1]
+    partial = out / "sweep.partial.csv"  # kept with the rows written, or gone if there are none
+    assert _rows_in(partial) > 0 if partial.exists() else "nothing written" in err.read_text()
 
 
 def test_dask_cluster_gives_the_same_table(tmp_path, reference):
