@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
+from planner.config_file import load_toml
 from planner.errors import SpecError
 from planner.ranges import Range
 
@@ -215,21 +215,7 @@ def load_spec(path: str | Path | None = None) -> RobotSpec:
     """
     path = Path(path) if path is not None else default_spec_path()
     where = f"robot spec {str(path)!r}"
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except FileNotFoundError:
-        raise SpecError(f"{where}: no such file") from None
-    except IsADirectoryError:
-        raise SpecError(f"{where}: is a directory, not a TOML file") from None
-    except OSError as err:
-        raise SpecError(f"{where}: cannot read ({err.strerror or err})") from None
-    except UnicodeDecodeError as err:
-        raise SpecError(
-            f"{where}: not UTF-8 text (byte {err.object[err.start]:#04x} at offset {err.start})"
-        ) from None
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"{where}: not valid TOML ({err})") from None
+    data = load_toml(path, where=where, kind="a TOML file", error=SpecError)
     return spec_from_dict(data, source=str(path))
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.sim.trial import TrialSpec, run_trial
+from planner.config_file import read_text
 from planner.errors import SlopewalkError
 from planner.spec import RobotSpec
 from planner.trajectory import GaitParams
@@ -121,15 +122,11 @@ def load_baseline(path: str | Path) -> list[dict]:
     where = f"baseline {str(path)!r}"
     hint = "; write one with `slopewalk compare --write-baseline`"
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise CompareError(f"{where}: no such file{hint}") from None
-    except IsADirectoryError:
-        raise CompareError(f"{where}: is a directory, not a JSON file") from None
-    except UnicodeDecodeError:
-        raise CompareError(f"{where}: not UTF-8 text") from None
-    except OSError as err:
-        raise CompareError(f"{where}: cannot read ({err.strerror})") from None
+        text = read_text(path, where=where, kind="a JSON file", error=CompareError)
+    except CompareError as err:
+        if str(err).endswith("no such file"):
+            raise CompareError(f"{err}{hint}") from None
+        raise
     if not text.strip():
         raise CompareError(f"{where}: is empty{hint}")
     try:

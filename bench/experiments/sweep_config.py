@@ -38,7 +38,6 @@ of the (scaled) robot spec, not its path; editing a spec file gives new ids.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -52,6 +51,7 @@ from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial
     spec_text,
 )
 from bench.sim.model import ACTUATOR_MODES
+from planner.config_file import load_toml
 from planner.errors import SlopewalkError
 from planner.spec import LINK_NAMES, RobotSpec, load_spec
 
@@ -100,19 +100,7 @@ def load_sweep(path: str | Path | None = None) -> SweepConfig:
             robot file, in one line naming the key.
     """
     path = Path(path) if path is not None else DEFAULT_SWEEP
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except FileNotFoundError:
-        raise SweepError(f"sweep file {str(path)!r}: no such file") from None
-    except IsADirectoryError:
-        raise SweepError(f"sweep file {str(path)!r}: is a directory, not a sweep TOML") from None
-    except UnicodeDecodeError as err:
-        raise SweepError(
-            f"sweep file {str(path)!r}: not UTF-8 text (byte {err.start}), so not TOML"
-        ) from None
-    except tomllib.TOMLDecodeError as err:
-        raise SweepError(f"sweep file {str(path)!r}: not valid TOML ({err})") from None
+    data = load_toml(path, where=f"sweep file {str(path)!r}", kind="a sweep TOML", error=SweepError)
     return sweep_from_dict(data, base_dir=path.parent, source=str(path))
 
 

@@ -383,7 +383,7 @@ def test_rows_of_another_sweep_are_refused(tmp_path, capsys, reference):
         ("[grid]\n", [], "grid is empty"),
         (None, [], "no such file"),
         ("DIR", [], "is a directory, not a sweep TOML"),
-        (b"\x00\xff\xfe binary", [], "not UTF-8 text (byte 1), so not TOML"),
+        (b"\x00\xff\xfe binary", [], "not UTF-8 text (byte 0xff at offset 1)"),
         ("[[trial]]\n", ["--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
         ("[[trial]]\n", ["--cluster", "localhost"], "not a scheduler address like tcp://"),
     ],
