@@ -301,6 +301,8 @@ class Timeline:
         "hold": ±1 held through each SSP; in each DSP the paper's cubic
         d0 + d1 t + d2 t² + d3 t³ with zero end rates carries λ from the previous
         value to the next (quasi-static: the whole transfer happens in the DSP).
+        A sample on a phase change belongs to the phase ``in_ssp`` gives it and takes
+        that phase's one-sided value (the last DSP sample keeps the cubic's λ̈).
         """
         k = np.arange(self.steps)
         lean = np.where(k % 2 == 0, 1.0, -1.0)  # step 0 stands on the right foot: lean right
@@ -316,7 +318,7 @@ class Timeline:
         return Curve(
             before + span * (3 * x**2 - 2 * x**3),
             span * 6 * x * (1 - x) / self.dsp_time,
-            span * (6 - 12 * x) / self.dsp_time**2 * (x < 1),
+            span * (6 - 12 * x) / self.dsp_time**2 * ~self.in_ssp,
         )
 
     @cached_property
