@@ -5,18 +5,19 @@ peak frontal tilt - to minimise the joint work w (``plan.evaluate``) under the Z
 condition min margin ≥ 0. The paper's objective (eq. 6) is O = w + p with
 p = 10⁴ when the ZMP leaves the support polygon.
 
-Why two modules: ``planner`` imports numpy/scipy only (DESIGN.md), so the problem
+Why two modules: ``planner`` imports numpy, scipy and numba only (DESIGN.md), so the problem
 *definition* lives here - the variables, their bounds derived from the spec's
 kinematics, the objective and constraint arrays and the paper's penalty - while
 the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/experiments/ga.py``.
 Any other optimiser can solve a ``GaitProblem`` through ``measure`` and
 ``objectives`` without pymoo.
 
-Kinematic admissibility: ``evaluate`` marks unreachable targets (work = inf,
+Kinematic admissibility: ``plan.score`` marks unreachable targets (work = inf,
 margin = −inf); in addition an individual that would drive a hip pitch, knee or
-ankle pitch joint past its limit at any sample is inadmissible (``joint_gap``, from
-the planner's own IK; the ankle rolls are kept within their limits by the tilt
-bounds). Both count as infeasible for every constraint treatment.
+ankle pitch joint past its limit at any sample is inadmissible (the gap ``plan.score``
+returns from the compiled kernel's IK; ``joint_gap`` is its readable numpy twin, held
+equal by a test; the ankle rolls are kept within their limits by the tilt bounds).
+Both count as infeasible for every constraint treatment.
 
 The bounds below come from the same geometry as ``plan._solve`` (hip and
 swing-ankle targets in each leg's tilted plane, see ``ik.tilted_plane_height``):
@@ -35,7 +36,7 @@ import numpy as np
 from planner.errors import SlopewalkError
 from planner.ik import tilted_plane_height, two_link_ik
 from planner.joints import JOINT_KINDS, RIGHT
-from planner.plan import evaluate
+from planner.plan import score
 from planner.spec import RobotSpec
 from planner.trajectory import Curve, GaitParams, Timeline
 
@@ -43,7 +44,7 @@ VARIABLES = ("hip_height", "swing_lift", "tilt")
 CONSTRAINTS = ("penalty", "margin")
 PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
 MIN_CLEARANCE = 0.005  # [m] smallest swing lift searched: the sole clears the plane by 5 mm
-SAMPLES_PER_STEP = 100  # plan resolution inside the GA: dt = step_time / 100
+SAMPLES_PER_STEP = 100  # GA grid: dt = step_time / 100, plus phase-change limits and refinement
 INADMISSIBLE_GAP = 1.0  # constraint value [m or rad] given to an unreachable individual
 _TILT_GRID = 61  # tilts tried when a bound is the best over all tilts
 
@@ -275,15 +276,14 @@ class GaitProblem:
             object.__setattr__(self, "bounds", gait_bounds(self.spec, self.params))
 
     def measure(self, population) -> Measurement:
-        """Plan every individual (one ``evaluate`` batch) and check the joint limits.
+        """Plan every individual and check the joint limits (one compiled ``plan.score`` call).
 
         Args:
             population: Rows (Hz [m], Szmax [m], tilt [rad]), shape (P, 3).
         """
         X = np.atleast_2d(np.asarray(population, dtype=float))
-        work, margin = evaluate(self.spec, self.params, X)
-        gap = joint_gap(self.spec, Timeline.of(self.params), X)
-        return Measurement(work, margin, np.where(np.isfinite(work), gap, np.inf))
+        work, margin, gap = score(self.spec, self.params, X)
+        return Measurement(work, margin, gap)
 
 
 def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray | None]:

@@ -1,8 +1,15 @@
 """Plan a walk: splines → IK → Newton-Euler → ZMP, support polygon, margin, work.
 
 ``plan_walk(spec, params)`` returns a ``Plan`` of time series for one walk;
-``evaluate(spec, params, population)`` runs the same pipeline for a whole GA
-population at once (the samples of all individuals form one flat batch).
+``evaluate(spec, params, population)`` scores a whole GA population. Both run
+the same compiled kernel (``planner/kernel``); ``planner/reference.py`` is the
+readable numpy pipeline a test holds it equal to.
+
+Where the GA's scores are exact: ``evaluate`` samples the walk at ``params.dt``
+plus both one-sided limits of every phase change (the last DSP and the first SSP
+sample at the same instant) and refines the margin at every local minimum between
+samples, so its minimum margin is that of the continuous walk, never above the
+margin of a finer plan of the same gait.
 
 Double-support load split (stated assumption): during each DSP the ground
 wrench moves from the foot that was loaded to the foot that will be, along a
@@ -24,21 +31,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from planner.ik import tilted_plane_height, two_link_ik
-from planner.joints import JOINT_NAMES, RIGHT, stance_swing_to_left_right
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
+from planner.errors import UnreachableError
+from planner.joints import JOINT_NAMES, stance_swing_to_left_right
+from planner.kernel import sample as sm
+from planner.kernel.run import kernel_walk
 from planner.spec import RobotSpec
-from planner.trajectory import Curve, GaitParams, Timeline, footprint_y
-from planner.zmp import (
-    cop_of_wrench,
-    foot_corners,
-    friction_ratio,
-    signed_margin,
-    support_polygon,
-    zmp_lipm,
-    zmp_multibody,
-)
+from planner.trajectory import GaitParams, Timeline
 
 
 @dataclass(frozen=True)
@@ -159,20 +157,57 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
     """
     params.check_fits(spec)
     timeline = Timeline.of(params)
-    walk = _solve(
-        spec,
-        timeline,
-        params.slope,
-        np.array([params.hip_height]),
-        np.array([params.swing_lift]),
-        np.array([params.tilt]),
-        strict=True,
-    )
-    return Plan(params=params, spec=spec, **{k: v[0] for k, v in walk.items()})
+    walk = kernel_walk(spec, timeline)
+    x = np.array([[params.hip_height, params.swing_lift, params.tilt]])
+    rows = walk.series(params.slope, x)[0]
+    _check_reach(spec, timeline.t, rows[:, sm.LEG_DISTANCE : sm.LEG_DISTANCE + 2])
+
+    def cols(start, width, shape=()):
+        return np.ascontiguousarray(rows[:, start : start + width]).reshape((-1, *shape))
+
+    power = rows[:, sm.POWER_JOINTS : sm.POWER_JOINTS + 8]
+    series = {
+        "t": timeline.t.copy(),
+        "q": cols(sm.Q, 8, (8,)),
+        "qd": cols(sm.QD, 8, (8,)),
+        "qdd": cols(sm.QDD, 8, (8,)),
+        "tau": cols(sm.TAU, 8, (8,)),
+        "zmp": cols(sm.ZMP, 2, (2,)),
+        "zmp_lipm": cols(sm.ZMP_LIPM, 2, (2,)),
+        "cop_ne": cols(sm.COP, 2, (2,)),
+        "com": cols(sm.COM, 3, (3,)),
+        "com_acc": cols(sm.COM_ACC, 3, (3,)),
+        "stance": timeline.stance.copy(),
+        "double_support": ~timeline.in_ssp,
+        "stance_sole": cols(sm.STANCE_SOLE, 3, (3,)),
+        "swing_sole": cols(sm.SWING_SOLE, 3, (3,)),
+        "polygon": cols(sm.POLYGON, 16, (8, 2)),
+        "margin": rows[:, sm.MARGIN].copy(),
+        "ground_force": cols(sm.GROUND, 3, (3,)),
+        "stance_force": cols(sm.STANCE_FORCE, 3, (3,)),
+        "swing_force": cols(sm.SWING_FORCE, 3, (3,)),
+        "friction_ratio": rows[:, sm.FRICTION].copy(),
+        "work": np.trapezoid(power, timeline.t, axis=0),
+    }
+    return Plan(params=params, spec=spec, **series)
 
 
-def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:
-    """Work and minimum ZMP margin of every individual of a GA population, in one batch.
+def _check_reach(spec: RobotSpec, t: np.ndarray, distance: np.ndarray) -> None:
+    """Raise on the first sample where a leg (stance first, then swing) cannot reach."""
+    lo, hi = abs(spec.shank - spec.thigh), spec.shank + spec.thigh
+    for leg in (0, 1):
+        d = distance[:, leg]
+        bad = (d >= hi) | (d <= lo)
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise UnreachableError(
+                f"unreachable hip target at t = {t[i]:.4f} s: hip-ankle "
+                f"distance {d[i]:.4f} m, the leg reaches ({lo:.4f}, {hi:.4f}) m"
+            )
+
+
+def score(spec: RobotSpec, params: GaitParams, population):
+    """Work, minimum ZMP margin and joint-limit gap of every individual of a population.
 
     Args:
         spec: The robot.
@@ -180,149 +215,19 @@ def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarra
         population: Rows (hip_height [m], swing_lift [m], tilt [rad]), shape (P, 3).
 
     Returns:
-        (work [J], min_margin [m]), each shape (P,); an individual whose legs cannot
-        reach its targets gets work = inf and margin = −inf.
+        (work [J], min_margin [m], joint_gap [rad]), each shape (P,). The margin is the
+        continuous walk's (module doc); the gap is the worst excursion of a pitch joint
+        (q2..q7) past its limit over the samples (≤ 0 inside the limits). An individual
+        whose legs cannot reach its targets gets work = inf, margin = −inf, gap = inf.
     """
     pop = np.atleast_2d(np.asarray(population, dtype=float))
-    walk = _solve(
-        spec,
-        Timeline.of(params),
-        params.slope,
-        pop[:, 0],
-        pop[:, 1],
-        pop[:, 2],
-        strict=False,
-        light=True,
-    )
-    work, margin = walk["work"].sum(axis=1), walk["margin"].min(axis=1)
-    bad = ~np.isfinite(work) | ~np.isfinite(margin)
-    return np.where(bad, np.inf, work), np.where(bad, -np.inf, margin)
+    return kernel_walk(spec, Timeline.of(params)).scores(params.slope, pop)
 
 
-def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False) -> dict:
-    """The pipeline for P parameter sets at once; every array gets a leading P axis."""
-    P, n = hip_height.size, timeline.t.size
-    chain = Chain.from_spec(spec)
-    gravity = gravity_in_slope(slope)
-
-    def col(x):  # one value per individual, as a column (P, 1)
-        return np.asarray(x, dtype=float).reshape(P, 1)
-
-    def flat(a):  # (n,) or (P, n) → the flat batch of P·n samples
-        return np.broadcast_to(a, (P, n)).reshape(-1)
-
-    zeros = np.zeros((P, n))
-
-    stance = flat(timeline.stance)
-    lean = timeline.tilt_shape.scaled(col(tilt))
-    towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)  # +1: swing hip at +y
-    z_swing = tilted_plane_height(
-        timeline.lift_shape.scaled(col(lift)), towards_swing * spec.hip_width, lean
-    )
-    pelvis = Curve(col(hip_height) - spec.ankle_height + zeros, zeros, zeros)
-    hip_w = tilted_plane_height(pelvis, towards_swing * spec.hip_width / 2, lean)
-    hip_u, sx = timeline.hip_x, timeline.swing_x
-    stance_target = (
-        Curve(*(flat(x) for x in (hip_u.p, hip_u.v, hip_u.a))),
-        Curve(flat(hip_w.p), flat(hip_w.v), flat(hip_w.a)),
-    )
-    swing_target = (
-        Curve(
-            *(
-                flat(h - s)
-                for h, s in zip((hip_u.p, hip_u.v, hip_u.a), (sx.p, sx.v, sx.a), strict=True)
-            )
-        ),
-        Curve(flat(hip_w.p - z_swing.p), flat(hip_w.v - z_swing.v), flat(hip_w.a - z_swing.a)),
-    )
-    t_flat = flat(timeline.t)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        legs = [
-            two_link_ik(target, spec.shank, spec.thigh, t_flat, strict=strict)
-            for target in (stance_target, swing_target)
-        ]
-    (bs, bt), (bs2, bt2) = legs
-    lam = Curve(flat(lean.p), flat(lean.v), flat(lean.a))
-    q, qd, qdd = (
-        np.stack([-lam_, -s, s - t, t, t2, s2 - t2, -s2, -lam_], axis=1)
-        for lam_, s, t, s2, t2 in (
-            (lam.p, bs.p, bt.p, bs2.p, bt2.p),
-            (lam.v, bs.v, bt.v, bs2.v, bt2.v),
-            (lam.a, bs.a, bt.a, bs2.a, bt2.a),
-        )
-    )
-
-    feet_y = footprint_y(timeline, spec.hip_width, col(tilt)[:, 0])  # (P, N)
-    step = np.minimum(timeline.step, timeline.steps - 1)
-    stance_sole = np.stack(
-        [flat(timeline.stance_x), feet_y[:, step].reshape(-1), np.zeros(P * n)], axis=1
-    )
-    R, o = chain.poses(q, stance_sole, stance)
-    dyn = inverse_dynamics_poses(chain, R, o, qd, qdd, stance, gravity)
-
-    # DSP split: the swing foot takes the share 1 - s of the total wrench.
-    swing_sole = o[9].T
-    other = flat(1.0 - _stance_share(timeline))[:, None]
-    swing_force = other * dyn.stance_force
-    swing_moment = other * (dyn.stance_moment + cross(stance_sole - swing_sole, dyn.stance_force))
-    tau = dyn.tau + swing_wrench_torques(chain, R, o, swing_force, swing_moment)
-
-    coms = dyn.com
-    zmp = zmp_multibody(chain.mass, coms, dyn.com_acc, dyn.momentum_rate, gravity)
-    double = flat(~timeline.in_ssp)
-    heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
-    polygon = support_polygon(
-        foot_corners(stance_sole, heel, toe, half),
-        foot_corners(swing_sole, heel, toe, half),
-        double,
-    )
-    margin = signed_margin(zmp, polygon)
-    power = np.abs(tau * qd).reshape(P, n, 8)
-    work = np.trapezoid(power, timeline.t, axis=1)
-    out = {"work": work, "margin": margin.reshape(P, n)}
-    if light:
-        return out
-    mass = chain.mass.sum()
-    com = np.einsum("k,nki->ni", chain.mass, coms) / mass
-    com_acc = np.einsum("k,nki->ni", chain.mass, dyn.com_acc) / mass
-    ground = dyn.stance_force  # the total; the DSP split only moves part of it to the swing foot
-    stance_force = ground - swing_force
-    series = {
-        "t": flat(timeline.t),
-        "q": q,
-        "qd": qd,
-        "qdd": qdd,
-        "tau": tau,
-        "zmp": zmp,
-        "zmp_lipm": zmp_lipm(com, com_acc, gravity),
-        "cop_ne": cop_of_wrench(ground, dyn.stance_moment, stance_sole),
-        "com": com,
-        "com_acc": com_acc,
-        "stance": stance,
-        "double_support": double,
-        "stance_sole": stance_sole,
-        "swing_sole": swing_sole,
-        "polygon": polygon,
-        "margin": margin,
-        "ground_force": ground,
-        "stance_force": stance_force,
-        "swing_force": swing_force,
-        "friction_ratio": friction_ratio(ground),
-    }
-    out.update({k: v.reshape((P, n) + v.shape[1:]) for k, v in series.items()})
-    return out
-
-
-def _stance_share(timeline: Timeline) -> np.ndarray:
-    """Share s of the ground wrench on the current stance foot per sample, shape (n,)."""
-    dsp = timeline.dsp_time
-    tau = timeline.t - timeline.step * timeline.step_time
-    x = np.clip(tau / dsp, 0.0, 1.0)
-    smooth = 3 * x**2 - 2 * x**3
-    start = np.where(timeline.step == 0, 0.5, 0.0)
-    share = start + (1.0 - start) * smooth
-    share = np.where(timeline.step == timeline.steps, 1.0 - 0.5 * smooth, share)
-    return np.where(timeline.in_ssp, 1.0, share)
+def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:
+    """Work [J] and minimum ZMP margin [m] of every individual (``score`` without the gap)."""
+    work, margin, _ = score(spec, params, population)
+    return work, margin
 
 
 def _spec_dict(spec: RobotSpec) -> dict:

@@ -1,8 +1,11 @@
-"""Plan a walk: splines → IK → Newton-Euler → ZMP, support polygon, margin, work.
+"""The readable numpy pipeline: splines → IK → Newton-Euler → ZMP, margin, work.
 
-``plan_walk(spec, params)`` returns a ``Plan`` of time series for one walk;
-``evaluate(spec, params, population)`` runs the same pipeline for a whole GA
-population at once (the samples of all individuals form one flat batch).
+This is the reference the compiled kernel (``planner/kernel``) is held equal to
+(tests/planner/test_kernel.py): the same maths written as whole-array numpy over a
+flat batch of P·n samples, one module per concept (``trajectory``, ``ik``,
+``kinematics``, ``newton_euler``, ``zmp``). ``plan.plan_walk`` and
+``plan.evaluate`` run the kernel; nothing but the tests and the benchmark's
+``numpy_evals_per_s`` runs this.
 
 Double-support load split (stated assumption): during each DSP the ground
 wrench moves from the foot that was loaded to the foot that will be, along a
@@ -19,16 +22,12 @@ actuators spend, Σ∫ |τ θ̇| dt, per joint and in total.
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict, dataclass
-
 import numpy as np
 
 from planner.ik import tilted_plane_height, two_link_ik
-from planner.joints import JOINT_NAMES, RIGHT, stance_swing_to_left_right
+from planner.joints import RIGHT
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
-from planner.spec import RobotSpec
 from planner.trajectory import Curve, GaitParams, Timeline, footprint_y
 from planner.zmp import (
     cop_of_wrench,
@@ -41,164 +40,34 @@ from planner.zmp import (
 )
 
 
-@dataclass(frozen=True)
-class Plan:
-    """The analytic prediction for one walk; arrays over n samples, vectors in S.
+def evaluate_reference(spec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:
+    """Work [J] and minimum margin [m] of each individual at ``params``' grid, shape (P,).
 
-    Attributes:
-        t: Sample times [s], (n,).
-        q, qd, qdd: Joint angles [rad], rates, accelerations, Table-I order, (n, 8).
-        tau: Joint torques [N m], (n, 8).
-        zmp: Multibody ZMP, eq. (4) [m], (n, 2).
-        zmp_lipm: LIPM ZMP, eq. (5) [m], (n, 2).
-        cop_ne: CoP of the Newton-Euler ground wrench [m], (n, 2).
-        com, com_acc: Whole-body CoM [m] and its acceleration [m/s²], (n, 3).
-        stance: Stance leg, 0 left / 1 right, (n,).
-        double_support: True in DSP, (n,).
-        stance_sole, swing_sole: Sole points under the ankles [m], (n, 3).
-        polygon: Support polygon vertices, counter-clockwise [m], (n, 8, 2).
-        margin: Signed ZMP distance to the polygon edge [m], positive inside, (n,).
-        ground_force: Total ground force [N], (n, 3).
-        stance_force, swing_force: Ground force on each foot (DSP split) [N], (n, 3).
-        friction_ratio: |F_t| / F_n of the total ground force, (n,).
-        work: Σ∫|τ θ̇| dt per joint [J], (8,).
-    """
-
-    params: GaitParams
-    spec: RobotSpec
-    t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
-    tau: np.ndarray
-    zmp: np.ndarray
-    zmp_lipm: np.ndarray
-    cop_ne: np.ndarray
-    com: np.ndarray
-    com_acc: np.ndarray
-    stance: np.ndarray
-    double_support: np.ndarray
-    stance_sole: np.ndarray
-    swing_sole: np.ndarray
-    polygon: np.ndarray
-    margin: np.ndarray
-    ground_force: np.ndarray
-    stance_force: np.ndarray
-    swing_force: np.ndarray
-    friction_ratio: np.ndarray
-    work: np.ndarray
-
-    @property
-    def q_left_right(self) -> np.ndarray:
-        """Joint angles in the MJCF's order (``joints.MJCF_JOINTS``) [rad], (n, 8)."""
-        return stance_swing_to_left_right(self.q, self.stance)
-
-    @property
-    def stable(self) -> bool:
-        """Analytic verdict: ZMP inside the support polygon at every sample."""
-        return bool(np.all(self.margin >= 0))
-
-    def summary(self) -> dict:
-        """Scalars a user reads first: margins, peak torques, work, verdict."""
-        peak = np.abs(self.tau).max(axis=0)
-        return {
-            "verdict": "stable" if self.stable else "zmp_outside",
-            "min_margin_m": float(self.margin.min()),
-            "time_of_min_margin_s": float(self.t[np.argmin(self.margin)]),
-            "peak_torque_Nm": dict(zip(JOINT_NAMES, peak.round(4).tolist(), strict=True)),
-            "peak_torque_over_stall": float(peak.max() / self.spec.stall_torque),
-            "work_J": float(self.work.sum()),
-            "max_friction_ratio": float(self.friction_ratio.max()),
-            "max_lipm_distance_m": float(np.hypot(*(self.zmp - self.zmp_lipm).T).max()),
-        }
-
-    def save_npz(self, file) -> None:
-        """Write the series and a ``meta`` JSON string (spec and gait parameters).
-
-        Args:
-            file: A path or a binary file object (``np.savez_compressed`` target).
-        """
-        meta = {
-            "params": asdict(self.params),
-            "spec": _spec_dict(self.spec),
-            "joint_names": list(JOINT_NAMES),
-            "summary": self.summary(),
-        }
-        arrays = {
-            k: getattr(self, k)
-            for k in (
-                "t",
-                "q",
-                "qd",
-                "qdd",
-                "tau",
-                "zmp",
-                "zmp_lipm",
-                "cop_ne",
-                "com",
-                "com_acc",
-                "stance",
-                "double_support",
-                "stance_sole",
-                "swing_sole",
-                "margin",
-                "ground_force",
-                "friction_ratio",
-                "work",
-            )
-        }
-        np.savez_compressed(file, q_left_right=self.q_left_right, meta=json.dumps(meta), **arrays)
-
-
-def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
-    """Plan one walk of ``params.steps`` steps for ``spec`` (see module doc).
-
-    Raises:
-        UnreachableError: the hip height or lift asks a leg for more than it reaches.
-    """
-    timeline = Timeline.of(params)
-    walk = _solve(
-        spec,
-        timeline,
-        params.slope,
-        np.array([params.hip_height]),
-        np.array([params.swing_lift]),
-        np.array([params.tilt]),
-        strict=True,
-    )
-    return Plan(params=params, spec=spec, **{k: v[0] for k, v in walk.items()})
-
-
-def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:
-    """Work and minimum ZMP margin of every individual of a GA population, in one batch.
-
-    Args:
-        spec: The robot.
-        params: Step time, slope, steps, sampling (its Hz, lift and tilt are ignored).
-        population: Rows (hip_height [m], swing_lift [m], tilt [rad]), shape (P, 3).
-
-    Returns:
-        (work [J], min_margin [m]), each shape (P,); an individual whose legs cannot
-        reach its targets gets work = inf and margin = −inf.
+    The numpy twin of ``plan.evaluate`` without its one-sided limits and refinement:
+    the margin is the minimum over ``Timeline.of(params).t`` only.
     """
     pop = np.atleast_2d(np.asarray(population, dtype=float))
-    walk = _solve(
-        spec,
-        Timeline.of(params),
-        params.slope,
-        pop[:, 0],
-        pop[:, 1],
-        pop[:, 2],
-        strict=False,
-        light=True,
-    )
+    walk = solve_reference(
+        spec, Timeline.of(params), params.slope, pop[:, 0], pop[:, 1], pop[:, 2],
+        strict=False, light=True,
+    )  # fmt: skip
     work, margin = walk["work"].sum(axis=1), walk["margin"].min(axis=1)
     bad = ~np.isfinite(work) | ~np.isfinite(margin)
     return np.where(bad, np.inf, work), np.where(bad, -np.inf, margin)
 
 
-def _solve(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False) -> dict:
-    """The pipeline for P parameter sets at once; every array gets a leading P axis."""
+def solve_reference(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False) -> dict:
+    """The pipeline for P parameter sets at once; every array gets a leading P axis.
+
+    Args:
+        spec: The robot. timeline: The walk's timing. slope: [rad].
+        hip_height, lift, tilt: Hz [m], Szmax [m], tilt [rad], each shape (P,).
+        strict: Raise ``UnreachableError`` on an unreachable target (else NaN there).
+        light: Return only ``work`` (P, 8) and ``margin`` (P, n).
+
+    Returns:
+        The fields of ``plan.Plan`` by name, each with a leading P axis.
+    """
     P, n = hip_height.size, timeline.t.size
     chain = Chain.from_spec(spec)
     gravity = gravity_in_slope(slope)
@@ -321,9 +190,3 @@ def _stance_share(timeline: Timeline) -> np.ndarray:
     share = start + (1.0 - start) * smooth
     share = np.where(timeline.step == timeline.steps, 1.0 - 0.5 * smooth, share)
     return np.where(timeline.in_ssp, 1.0, share)
-
-
-def _spec_dict(spec: RobotSpec) -> dict:
-    d = asdict(spec)
-    d["links"] = {k: asdict(v) for k, v in spec.links.items()}
-    return d

@@ -1,0 +1,65 @@
+"""The compiled evaluation kernel: the whole analytic pipeline of ``plan.py`` in numba.
+
+``tables`` turns a robot and a walk's timeline into flat numeric tables (the
+gait as one cubic polynomial per piece of the walk, the DH chain's constants, the
+sample list); ``sample`` is the per-sample pipeline (spline gait in closed form,
+IK, FK, Newton-Euler, multibody ZMP, support polygon and margin, friction ratio,
+joint power); ``run`` drives it over a plan's samples or over a GA population
+(``prange``, one thread per individual).
+
+Compiled code is cached (``cache=True``) in the user's cache directory, never in
+the source tree, so the package works from a read-only install: unless the user
+has set ``NUMBA_CACHE_DIR`` it is set here, before numba is first imported, to
+``$XDG_CACHE_HOME/slopewalk/numba/<sources>`` (``~/.cache/slopewalk/numba/…`` by
+default), or to a per-user folder under the temp directory if that one cannot be
+written. ``<sources>`` is a hash of the kernel's source files: numba checks only the
+timestamp of the file a cached function is defined in, not of the functions it
+calls from other files, so a changed ``sample.py`` must never meet a cached
+``run.py`` compiled against the old one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+_SOURCES = ("tables.py", "sample.py", "run.py")
+
+
+def sources_hash() -> str:
+    """Short hash of the kernel's source files (names the cache folder)."""
+    digest = hashlib.sha256()
+    for name in _SOURCES:
+        digest.update((Path(__file__).parent / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def cache_dir() -> Path:
+    """Where the compiled kernel is cached when ``NUMBA_CACHE_DIR`` is not set."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "slopewalk" / "numba" / sources_hash()
+
+
+def _writable(path: Path) -> bool:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _set_cache_dir() -> None:
+    if os.environ.get("NUMBA_CACHE_DIR") or "numba" in sys.modules:
+        return  # the user's choice (or a numba already configured) wins
+    path = cache_dir()
+    if not _writable(path):
+        path = Path(tempfile.gettempdir()) / f"slopewalk-numba-{os.getuid()}" / sources_hash()
+    os.environ["NUMBA_CACHE_DIR"] = str(path)
+
+
+_set_cache_dir()

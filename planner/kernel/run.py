@@ -1,0 +1,273 @@
+"""Drivers of the compiled sample pipeline: a plan's series, a GA population's scores.
+
+``series`` fills one row per sample (``sample.ROW`` floats) for each individual of
+a population (``prange``): the plan's time series. ``scores`` reduces the same
+rows per individual to the GA's numbers - joint work Σ∫|τθ̇|dt [J] (trapezoid over
+the samples), minimum ZMP margin [m] and the worst joint-limit excursion [rad] -
+and refines the margin between samples: at every interior local minimum of the
+sampled margin it searches the bracket of the two neighbouring samples by
+safeguarded parabolic interpolation, so a dip between samples is not missed. The
+GA's samples include both one-sided limits of every phase change
+(``tables.limit_samples``).
+
+The Python side (``KernelWalk``) builds the tables once per robot and timeline.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, prange
+
+from planner.joints import JOINT_KINDS
+from planner.kernel import sample as sm
+from planner.kernel import tables as tb
+from planner.kinematics import gravity_in_slope
+from planner.spec import RobotSpec
+from planner.trajectory import Timeline
+
+REFINE_ITERATIONS = 12  # parabolic steps per local minimum at most
+REFINE_TOL = 1e-7  # [s] stop when the bracket's best point moves less than this
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _footprints(landing, tilt, hip_width):
+    """y of each step's stance sole [m] (``trajectory.footprint_y``), shape (N,)."""
+    n = landing.size
+    y = np.empty(n)
+    y[0] = -hip_width / 2
+    for k in range(1, n):
+        towards = 1.0 if (k - 1) % 2 == 0 else -1.0
+        y[k] = y[k - 1] + towards * hip_width / np.cos(tilt * landing[k - 1])
+    return y
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, pieces, times):
+    """Rows of every sample for every individual, shape (P, n, ROW)."""
+    P, n = X.shape[0], times.size
+    out = np.empty((P, n, sm.ROW))
+    for p in prange(P):
+        work = np.empty((sm.SCRATCH, 16))
+        y = _footprints(landing, X[p, 2], geometry[tb.HIP_WIDTH])
+        for j in range(n):
+            sm.evaluate_sample(
+                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, X[p],
+                pieces[j], times[j], out[p, j], work,
+            )  # fmt: skip
+    return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _margin_at(args, x, y, piece, t, row, work):
+    pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity = args
+    sm.evaluate_sample(
+        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work
+    )
+    return row[sm.MARGIN]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
+    """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search)."""
+    t1a = args[0][pa, tb.T1]
+    best = fb
+    a, b, c = ta, tb_, tc
+    for _ in range(REFINE_ITERATIONS):
+        num = (b - a) ** 2 * (fb - fc) - (b - c) ** 2 * (fb - fa)
+        den = (b - a) * (fb - fc) - (b - c) * (fb - fa)
+        u = b - 0.5 * num / den if den != 0 else np.nan
+        if not (a < u < c) or abs(u - b) < 0.5 * REFINE_TOL:  # golden step into the larger side
+            u = b + 0.381966 * (c - b) if (c - b) > (b - a) else b - 0.381966 * (b - a)
+        piece = pa if u <= t1a else pc
+        fu = _margin_at(args, x, y, piece, u, row, work)
+        moved = abs(u - b)
+        if fu < fb:
+            if u < b:
+                c, fc = b, fb
+            else:
+                a, fa = b, fb
+            b, fb = u, fu
+        elif u < b:
+            a, fa = u, fu
+        else:
+            c, fc = u, fu
+        best = min(best, fu)
+        if moved < REFINE_TOL:
+            break
+    return best
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _refine_all(args, x, y, pieces, times, margin, row, work):
+    """Smallest margin [m] found by refining every local minimum of the sampled ``margin``.
+
+    Interior minima are bracketed by their two neighbours. At the ends of a phase
+    (where the one-sided limits sit) a probe a thousandth of the sample spacing
+    inside tells whether the margin still falls going inwards; if it does, the
+    bracket is (end, probe, next sample).
+    """
+    pi = args[1]
+    n = times.size
+    low = np.inf
+    for j in range(n):
+        ph = pi[pieces[j], tb.PHASE]
+        left = j > 0 and pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
+        right = j < n - 1 and pi[pieces[j + 1], tb.PHASE] == ph and times[j + 1] > times[j]
+        if left and right:
+            if margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
+                found = _refine(
+                    args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j],
+                    times[j], margin[j], pieces[j + 1], times[j + 1], margin[j + 1], row, work,
+                )  # fmt: skip
+                low = min(low, found)
+        elif right and margin[j] <= margin[j + 1]:  # first sample of a phase
+            u = times[j] + 1e-3 * (times[j + 1] - times[j])
+            fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            if fu < margin[j]:
+                found = _refine(
+                    args, x, y, pieces[j], times[j], margin[j], pieces[j], u, fu,
+                    pieces[j + 1], times[j + 1], margin[j + 1], row, work,
+                )  # fmt: skip
+                low = min(low, found)
+        elif left and margin[j] <= margin[j - 1]:  # last sample of a phase
+            u = times[j] - 1e-3 * (times[j] - times[j - 1])
+            fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            if fu < margin[j]:
+                found = _refine(
+                    args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], u, fu,
+                    pieces[j], times[j], margin[j], row, work,
+                )  # fmt: skip
+                low = min(low, found)
+    return low
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def scores(
+    pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, limits, X, pieces, times,
+    refine,
+):  # fmt: skip
+    """Work [J], minimum margin [m], joint gap [rad] per individual, each shape (P,).
+
+    ``limits``: (lower, upper) [rad] of each Table-I joint, shape (8, 2); the gap is the
+    worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples.
+    Unreachable individuals get work = inf, margin = −inf, gap = inf.
+    """
+    P, n = X.shape[0], times.size
+    work_out, margin_out, gap_out = np.empty(P), np.empty(P), np.empty(P)
+    args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
+    for p in prange(P):
+        work = np.empty((sm.SCRATCH, 16))
+        row = np.empty(sm.ROW)
+        margin = np.empty(n)
+        power = np.empty(n)
+        x = X[p]
+        y = _footprints(landing, x[2], geometry[tb.HIP_WIDTH])
+        gap = -np.inf
+        for j in range(n):
+            sm.evaluate_sample(
+                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x,
+                pieces[j], times[j], row, work,
+            )  # fmt: skip
+            margin[j] = row[sm.MARGIN]
+            power[j] = row[sm.POWER]
+            for i in range(1, 7):
+                q = row[sm.Q + i]
+                gap = max(gap, limits[i, 0] - q, q - limits[i, 1])
+        total = 0.0
+        low = np.inf
+        bad = False
+        for j in range(n):
+            if np.isnan(margin[j]) or np.isnan(power[j]):
+                bad = True
+            low = min(low, margin[j])
+            if j:
+                total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
+        if bad:
+            work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
+            continue
+        if refine:
+            low = min(low, _refine_all(args, x, y, pieces, times, margin, row, work))
+        work_out[p], margin_out[p], gap_out[p] = total, low, gap
+    return work_out, margin_out, gap_out
+
+
+@dataclass(frozen=True)
+class KernelWalk:
+    """A robot and a timeline in the kernel's tables, with both sample lists.
+
+    Attributes:
+        timeline: The walk's timing.
+        gait, chain: ``tables.GaitTable``, ``tables.ChainTable``.
+        limits: Joint limits per Table-I joint [rad], (8, 2).
+        grid: (pieces, t) of ``timeline.t`` (the plan's samples).
+        limit: (pieces, t) of the grid plus one-sided limits at every piece end (the GA's).
+    """
+
+    timeline: Timeline
+    gait: tb.GaitTable
+    chain: tb.ChainTable
+    limits: np.ndarray
+    grid: tuple[np.ndarray, np.ndarray]
+    limit: tuple[np.ndarray, np.ndarray]
+
+    @classmethod
+    def of(cls, spec: RobotSpec, timeline: Timeline) -> KernelWalk:
+        gait = tb.GaitTable.of(timeline)
+        limits = np.array([spec.joint_limits[kind] for kind in JOINT_KINDS], dtype=float)
+        return cls(
+            timeline,
+            gait,
+            tb.ChainTable.of(spec),
+            limits,
+            tb.grid_samples(gait, timeline),
+            tb.limit_samples(gait, timeline),
+        )
+
+    def _args(self, slope: float):
+        g, c = self.gait, self.chain
+        gravity = gravity_in_slope(slope)
+        return (
+            g.floats, g.ints, g.landing, c.geometry, c.a, c.d5, c.mass, c.com, c.inertia, gravity
+        )  # fmt: skip
+
+    def series(self, slope: float, X) -> np.ndarray:
+        """Rows (``sample`` layout) at the grid samples, shape (P, n, ROW)."""
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        return series(*self._args(slope), X, *self.grid)
+
+    def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True):
+        """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
+
+        Args:
+            samples: "limit" (the GA's: grid plus one-sided limits) or "grid".
+            refine: Refine the margin at every local minimum between samples.
+        """
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        pieces, times = self.limit if samples == "limit" else self.grid
+        return scores(*self._args(slope), self.limits, X, pieces, times, refine)
+
+
+_WALKS: dict = {}
+
+
+def kernel_walk(spec: RobotSpec, timeline: Timeline) -> KernelWalk:
+    """``KernelWalk.of``, remembered for the last few (spec, timing) pairs."""
+    key = (
+        id(spec),
+        timeline.step_time,
+        timeline.steps,
+        timeline.step_length,
+        timeline.ssp_fraction,
+        timeline.dt,
+        timeline.tilt_profile,
+    )
+    hit = _WALKS.get(key)
+    if hit is not None and hit[0] is spec:
+        return hit[1]
+    if len(_WALKS) >= 32:
+        _WALKS.pop(next(iter(_WALKS)))
+    walk = KernelWalk.of(spec, timeline)
+    _WALKS[key] = (spec, walk)
+    return walk

@@ -1,0 +1,226 @@
+"""Flat numeric tables the compiled kernel reads: gait pieces, chain constants, samples.
+
+The walk is cut into pieces on which every parameter-free shape of
+``trajectory.Timeline`` is one cubic polynomial of the local time τ = t − t0 [s]:
+per step a DSP, then the SSP in two halves (the swing splines have a knot at
+mid-swing, the "sway" tilt too), and the closing DSP. Every knot of every spline
+is a piece boundary, so on a piece each shape is exactly c0 + c1 τ + c2 τ² + c3 τ³
+and the kernel evaluates the gait at any time in closed form.
+
+Shapes (columns ``HIP_X`` … ``SHARE``, each 4 coefficients): hip x relative to
+the stance ankle [m], swing ankle x relative to the stance ankle [m], swing sole
+height per unit lift [-], lean λ per unit tilt [-], and the stance foot's share of
+the ground wrench [-] (``plan._stance_share``). Lengths in metres, times in
+seconds, angles in radians; positions in the slope frame S.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from planner.joints import LEFT, RIGHT
+from planner.kinematics import Chain
+from planner.spec import RobotSpec
+from planner.trajectory import Timeline
+
+# float columns of a piece
+T0, T1, STANCE_X, TOWARDS = 0, 1, 2, 3
+HIP_X, SWING_X, LIFT, TILT, SHARE = 4, 8, 12, 16, 20
+PIECE_FLOATS = 24
+# int columns of a piece
+STEP, SIDE, SSP, FOOT, PHASE = 0, 1, 2, 3, 4
+PIECE_INTS = 5
+# geometry vector
+SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH = range(7)
+
+# The Table-I structure the kernel is written for (kinematics.Chain.from_spec).
+_ALPHA = np.array([0, -np.pi / 2, 0, 0, 0, 0, 0, np.pi / 2])
+_SIGN = np.array([-1, 1, 1, 1, -1, -1, -1, -1], dtype=float)
+_OFFSET = np.array([0, 0, 0, 0, np.pi, 0, 0, 0])
+
+
+@dataclass(frozen=True)
+class GaitTable:
+    """The walk as pieces (see module doc).
+
+    Attributes:
+        floats: Per piece t0, t1 [s], stance x [m], towards-swing sign (+1: the swing
+            hip is at +y_S), then 5 shapes × 4 coefficients, shape (K, 24).
+        ints: Per piece step index (N = closing DSP), stance side (0 left / 1 right),
+            in SSP (0/1), footprint index, phase index, shape (K, 5).
+        landing: λ per unit tilt at each touch-down k = 0..N-1 [-], shape (N,).
+        steps: N.
+    """
+
+    floats: np.ndarray
+    ints: np.ndarray
+    landing: np.ndarray
+    steps: int
+
+    @classmethod
+    def of(cls, timeline: Timeline) -> GaitTable:
+        T, N, L = timeline.step_time, timeline.steps, timeline.step_length
+        dsp, ssp = timeline.dsp_time, timeline.ssp_fraction * timeline.step_time
+        end = timeline.t[-1]
+        hip = CubicSpline(
+            np.append(np.arange(N) * T, end),
+            np.append((2 * np.arange(N) - 1) * L / 4, (2 * N - 1) * L / 4),
+            bc_type="clamped",
+        )
+        swing = CubicSpline([0.0, 0.5, 1.0], [-L / 2, 0.0, L / 2], bc_type="clamped")
+        lift = CubicSpline([0.0, 0.5, 1.0], [0.0, 1.0, 0.0], bc_type="clamped")
+        lean = np.where(np.arange(N) % 2 == 0, 1.0, -1.0)
+        sway = None
+        if timeline.tilt_profile == "sway":
+            knots = np.concatenate([[0.0], (np.arange(N) + 1 - timeline.ssp_fraction / 2) * T])
+            sway = CubicSpline(
+                np.append(knots, end), np.concatenate([[0.0], lean, [0.0]]), bc_type="clamped"
+            )
+        rows_f, rows_i = [], []
+        for k in range(N + 1):
+            start = k * T
+            spans = [(start, start + dsp, 0)]
+            if k < N:
+                mid = start + dsp + ssp / 2
+                spans += [(start + dsp, mid, 1), (mid, start + T, 1)]
+            for t0, t1, in_ssp in spans:
+                f = np.zeros(PIECE_FLOATS)
+                stance_k = min(k, N - 1)
+                side = RIGHT if stance_k % 2 == 0 else LEFT
+                f[T0], f[T1] = t0, t1
+                f[STANCE_X] = stance_k * L / 2
+                f[TOWARDS] = 1.0 if side == RIGHT else -1.0
+                f[HIP_X : HIP_X + 4] = _cubic(lambda t, nu: hip(t, nu), t0, t1)
+                f[HIP_X] -= f[STANCE_X]
+                if in_ssp:
+
+                    def in_s(spline, t0_ssp=start + dsp):
+                        return lambda t, nu: spline((t - t0_ssp) / ssp, nu) / ssp**nu
+
+                    f[SWING_X : SWING_X + 4] = _cubic(in_s(swing), t0, t1)
+                    f[LIFT : LIFT + 4] = _cubic(in_s(lift), t0, t1)
+                    f[SHARE] = 1.0
+                else:
+                    f[SWING_X] = -L / 2 if k < N else L / 2
+                    smooth = np.array([0.0, 0.0, 3 / dsp**2, -2 / dsp**3])
+                    if k == 0:
+                        f[SHARE : SHARE + 4] = 0.5 * smooth + [0.5, 0, 0, 0]
+                    elif k == N:
+                        f[SHARE : SHARE + 4] = [1.0, 0, 0, 0] - 0.5 * smooth
+                    else:
+                        f[SHARE : SHARE + 4] = smooth
+                if sway is not None:
+                    f[TILT : TILT + 4] = _cubic(lambda t, nu: sway(t, nu), t0, t1)
+                else:
+                    before = 0.0 if k == 0 else lean[k - 1]
+                    after = lean[k] if k < N else 0.0
+                    if in_ssp:
+                        f[TILT] = after
+                    else:
+                        span = after - before
+                        f[TILT : TILT + 4] = [before, 0.0, 3 * span / dsp**2, -2 * span / dsp**3]
+                rows_f.append(f)
+                rows_i.append([k, side, in_ssp, stance_k, 2 * k + in_ssp])
+        floats, ints = np.array(rows_f), np.array(rows_i, dtype=np.int64)
+        first = np.searchsorted(floats[:, T0], (np.arange(N) + 1) * T - 1e-9 * T)
+        return cls(floats, ints, floats[first, TILT].copy(), N)
+
+    def piece_of(self, timeline: Timeline) -> np.ndarray:
+        """Piece index of each sample of ``timeline.t``, by the Timeline's own phase rule."""
+        step, in_ssp = timeline.step, timeline.in_ssp
+        ssp = timeline.ssp_fraction * timeline.step_time
+        tau = timeline.t - step * timeline.step_time - timeline.dsp_time
+        return np.where(in_ssp, 3 * step + 1 + (tau > ssp / 2), 3 * step)
+
+
+def _cubic(f, t0: float, t1: float) -> np.ndarray:
+    """Coefficients (c0..c3) in τ = t − t0 of a cubic piece given as f(t, derivative order).
+
+    Evaluated at the piece's midpoint (never ambiguous at a knot), then shifted to t0.
+    """
+    tm = 0.5 * (t0 + t1)
+    b0, b1, b2, b3 = (float(f(tm, nu)) / fact for nu, fact in enumerate((1, 1, 2, 6)))
+    d = t0 - tm
+    return np.array(
+        [b0 + d * (b1 + d * (b2 + d * b3)), b1 + d * (2 * b2 + 3 * d * b3), b2 + 3 * d * b3, b3]
+    )
+
+
+@dataclass(frozen=True)
+class ChainTable:
+    """The robot's constants in the kernel's layout.
+
+    Attributes:
+        geometry: shank, thigh, hip width, ankle height, heel, toe [m], half foot width [m].
+        a: DH a_{i-1} [m], (8,). d5: DH d of the swing hip row per stance side [m], (2,).
+        mass: Link masses of DH frames 0..8 [kg], (9,).
+        com: Link CoMs in their DH frame [m], (2, 9, 3).
+        inertia: Inertia about the CoM in DH axes [kg m²], (9, 3, 3).
+    """
+
+    geometry: np.ndarray
+    a: np.ndarray
+    d5: np.ndarray
+    mass: np.ndarray
+    com: np.ndarray
+    inertia: np.ndarray
+
+    @classmethod
+    def of(cls, spec: RobotSpec) -> ChainTable:
+        chain = Chain.from_spec(spec)
+        assert np.allclose(chain.alpha, _ALPHA) and np.array_equal(chain.theta_sign, _SIGN)
+        assert np.allclose(chain.theta_offset, _OFFSET)
+        assert not np.delete(chain.d, 4, axis=1).any()
+        assert np.array_equal(chain.inertia[0], chain.inertia[1])
+        geometry = np.array(
+            [
+                spec.shank,
+                spec.thigh,
+                spec.hip_width,
+                spec.ankle_height,
+                spec.heel_offset,
+                spec.ankle_to_toe,
+                spec.foot_width / 2,
+            ]
+        )
+        return cls(
+            geometry,
+            chain.a.copy(),
+            chain.d[:, 4].copy(),
+            chain.mass.copy(),
+            chain.com.copy(),
+            np.ascontiguousarray(chain.inertia[0]),
+        )
+
+
+def grid_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's samples: ``timeline.t`` with the Timeline's phase rule.
+
+    Returns:
+        (piece index (n,), t [s] (n,)).
+    """
+    return table.piece_of(timeline), timeline.t.copy()
+
+
+def limit_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
+    """The GA's samples: the grid of ``timeline`` plus both one-sided limits of every piece.
+
+    Each piece gets its two ends and the grid times strictly inside it, so every
+    phase change is seen from both sides (last DSP sample, first SSP sample at the
+    same instant). Sorted by time, pieces in order.
+
+    Returns:
+        (piece index (m,), t [s] (m,)).
+    """
+    t = timeline.t
+    eps = 1e-9 * timeline.step_time
+    pieces, times = [], []
+    for k, (t0, t1) in enumerate(table.floats[:, [T0, T1]]):
+        inner = t[(t > t0 + eps) & (t < t1 - eps)]
+        ts = np.concatenate([[t0], inner, [t1]])
+        pieces.append(np.full(ts.size, k))
+        times.append(ts)
+    return np.concatenate(pieces), np.concatenate(times)
