@@ -1,0 +1,179 @@
+"""The compiled kernel against the numpy reference; the GA's margin against finer plans."""
+
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner.gait_search import GaitProblem, ga_params, joint_gap
+from planner.kernel import sample as sm
+from planner.kernel.run import kernel_walk
+from planner.kernel.tables import T0, T1, GaitTable, limit_samples
+from planner.plan import plan_walk, score
+from planner.reference import evaluate_reference, solve_reference
+from planner.trajectory import GaitParams, Timeline
+
+ROOT = Path(__file__).resolve().parents[2]
+SLOPES_DEG = (-30.0, -12.0, 0.0, 17.5, 35.0)
+# (row slice of the kernel, key of the reference)
+SERIES = {
+    "q": (sm.Q, 8),
+    "qd": (sm.QD, 8),
+    "qdd": (sm.QDD, 8),
+    "tau": (sm.TAU, 8),
+    "zmp": (sm.ZMP, 2),
+    "zmp_lipm": (sm.ZMP_LIPM, 2),
+    "cop_ne": (sm.COP, 2),
+    "com": (sm.COM, 3),
+    "com_acc": (sm.COM_ACC, 3),
+    "swing_sole": (sm.SWING_SOLE, 3),
+    "polygon": (sm.POLYGON, 16),
+    "margin": (sm.MARGIN, 1),
+    "ground_force": (sm.GROUND, 3),
+    "swing_force": (sm.SWING_FORCE, 3),
+    "friction_ratio": (sm.FRICTION, 1),
+}
+
+
+def _population(spec, params, size, seed):
+    """Random individuals in the GA's box, reachable and within the joint limits."""
+    problem = GaitProblem(spec, params)
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (8 * size, 3))
+    work, _, gap = score(spec, params, X)
+    X = X[np.isfinite(work) & (gap <= 0)][:size]
+    assert len(X) == size
+    return X
+
+
+def _close(name, kernel, reference, rtol=1e-9):
+    """Equal within rtol of the series' own finite scale; NaN and ±inf at the same places."""
+    kernel, reference = np.asarray(kernel, dtype=float), np.asarray(reference, dtype=float)
+    finite = np.isfinite(reference)
+    assert np.array_equal(finite, np.isfinite(kernel)), name
+    assert np.array_equal(kernel[~finite], reference[~finite], equal_nan=True), name
+    if not finite.any():
+        return
+    scale = np.abs(reference[finite]).max() or 1.0
+    error = np.abs(kernel[finite] - reference[finite]).max() / scale
+    assert error <= rtol, f"{name}: relative error {error:.2e}"
+
+
+@pytest.mark.parametrize("profile", ["hold", "sway"])
+@pytest.mark.parametrize("slope_deg", SLOPES_DEG)
+def test_kernel_equals_the_numpy_reference(spec, slope_deg, profile):
+    """Every series of random admissible walks, to 1e-9 of its scale; work and min margin too."""
+    step_time = 0.5 + (slope_deg + 30) / 65  # 0.5 … 1.5 s across the slopes
+    params = ga_params(spec, step_time, np.deg2rad(slope_deg), tilt_profile=profile)
+    X = _population(spec, params, 12, seed=int(slope_deg + 100))
+    X[:, 2] *= np.where(np.arange(len(X)) % 2, 1.0, -1.0)  # both signs of the tilt
+    timeline = Timeline.of(params)
+    rows = kernel_walk(spec, timeline).series(params.slope, X)
+    reference = solve_reference(spec, timeline, params.slope, *X.T, strict=False)
+    for key, (start, width) in SERIES.items():
+        _close(
+            key, rows[..., start : start + width], reference[key].reshape(rows.shape[:2] + (-1,))
+        )
+    power = rows[..., sm.POWER_JOINTS : sm.POWER_JOINTS + 8]
+    _close("work", np.trapezoid(power, timeline.t, axis=1), reference["work"])
+    work, margin, _ = kernel_walk(spec, timeline).scores(
+        params.slope, X, samples="grid", refine=False
+    )
+    ref_work, ref_margin = evaluate_reference(spec, params, X)
+    _close("total work", work, ref_work)
+    _close("min margin", margin, ref_margin)
+
+
+def test_plan_walk_is_the_reference_plan(spec):
+    """The Plan the CLI writes (1 ms, nominal gait on 22.5°) equals the numpy pipeline's."""
+    params = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(22.5))
+    plan = plan_walk(spec, params)
+    x = np.array([[params.hip_height], [params.swing_lift], [params.tilt]])
+    reference = solve_reference(spec, Timeline.of(params), params.slope, *x, strict=True)
+    for key in (*SERIES, "stance", "double_support", "stance_sole", "stance_force", "work", "t"):
+        _close(key, getattr(plan, key), reference[key][0])
+
+
+def test_joint_gap_equals_the_numpy_joint_check(spec):
+    params = ga_params(spec, 1.0, np.deg2rad(22.5))
+    problem = GaitProblem(spec, params)
+    X = np.random.default_rng(5).uniform(problem.bounds.xl, problem.bounds.xu, (400, 3))
+    _, _, gap = score(spec, params, X)
+    reference = joint_gap(spec, Timeline.of(params), X)
+    assert np.isinf(gap).any() and (gap > 0).any() and (gap <= 0).any()
+    np.testing.assert_allclose(gap, reference, atol=1e-12, rtol=0)
+
+
+def test_the_ga_samples_see_both_sides_of_every_phase_change(spec):
+    timeline = Timeline.of(ga_params(spec, 1.0, 0.0))
+    table = GaitTable.of(timeline)
+    pieces, t = limit_samples(table, timeline)
+    in_ssp = table.ints[pieces, 2].astype(bool)
+    changes = np.flatnonzero(np.diff(in_ssp.astype(int)))
+    assert len(changes) == 2 * timeline.steps  # DSP→SSP and SSP→DSP in every step
+    np.testing.assert_array_equal(t[changes], t[changes + 1])  # the same instant, both sides
+    np.testing.assert_array_equal(table.floats[pieces[changes], T1], t[changes])
+    np.testing.assert_array_equal(table.floats[pieces[changes + 1], T0], t[changes])
+
+
+def test_ga_margin_is_the_walk_minimum(spec):
+    """1,000 random admissible individuals at 5 slopes: the GA's margin vs finer plans.
+
+    Never above the 1 ms plan's (so a gait feasible in the GA is feasible at 1 ms),
+    and within 0.05 mm of a brute-force plan that resolves the minimum: the 1 ms plan
+    with its phase-change limits where that already agrees, else the same at 20 µs.
+    A near-singular swing leg (Hz close to its upper bound) moves the ZMP by metres
+    per second just after lift-off, faster than a 1 ms plan resolves.
+    """
+    worst = {}
+    for slope_deg in (-30.0, -10.0, 0.0, 22.5, 35.0):
+        params = ga_params(spec, 1.0, np.deg2rad(slope_deg))
+        X = _population(spec, params, 200, seed=11)
+        _, margin, _ = score(spec, params, X)
+        fine = kernel_walk(spec, Timeline.of(replace(params, dt=1e-3)))
+        _, plan_1ms, _ = fine.scores(params.slope, X, samples="grid", refine=False)
+        assert np.all(margin <= plan_1ms + 1e-12)
+        _, brute, _ = fine.scores(params.slope, X, samples="limit", refine=False)
+        far = np.abs(margin - brute) > 5e-5
+        if far.any():
+            dense = kernel_walk(spec, Timeline.of(replace(params, dt=2e-5)))
+            _, brute[far], _ = dense.scores(params.slope, X[far], samples="limit", refine=False)
+        error = np.abs(margin - brute)
+        worst[slope_deg] = (error.max() * 1e3, far.sum(), (plan_1ms - margin).max() * 1e3)
+        assert error.max() <= 5e-5, slope_deg
+    print("\nslope: max |GA - brute force| [mm], resolved only at 20 µs, max 1 ms plan - GA [mm]")
+    for slope_deg, (err, n_far, above) in worst.items():
+        print(f"{slope_deg:6.1f}: {err:.2e}  {n_far:3d}  {above:.4f}")
+
+
+def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path):
+    """A read-only install, no NUMBA_CACHE_DIR: compiled code goes to ~/.cache/slopewalk/numba."""
+    install = tmp_path / "site"
+    shutil.copytree(ROOT / "planner", install / "planner", ignore=shutil.ignore_patterns("__py*"))
+    for path in [install, *install.rglob("*")]:
+        path.chmod(0o555 if path.is_dir() else 0o444)
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "XDG_"))}
+    env.update(HOME=str(home), PYTHONPATH=str(install), PYTHONDONTWRITEBYTECODE="1")
+    code = (
+        "import planner.plan as p, planner.spec as s, planner.trajectory as t;"
+        "spec = s.load_spec(); plan = p.plan_walk(spec, t.GaitParams.nominal(spec, 1.0));"
+        f"assert p.__file__.startswith({str(install)!r}); print(plan.t.size)"
+    )
+    try:
+        result = subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=tmp_path
+        )
+    finally:
+        for path in [install, *install.rglob("*")]:
+            path.chmod(0o755)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "4401"
+    assert list((home / ".cache" / "slopewalk" / "numba").rglob("*.nbi"))
+    assert not list(install.rglob("*.nbi")) and not list(install.rglob("*.nbc"))
