@@ -1,12 +1,21 @@
 """Speed figures, measured in one run and printed as ``name: value`` lines.
 
-``planner``: time to plan one 4-step walk at 1 ms resolution (``plan_ms``);
-GA-population evaluations per second at 100 samples per step (``evals_per_s``)
-and the speed-up of the vectorised batch over calling the single-walk planner in
-a Python loop on the same individuals (``speedup_vs_loop``).
+``planner``: the compiled kernel (``planner/kernel``). ``plan_ms``: one 4-step walk
+at 1 ms after warm-up; ``evals_per_s``: a GA population (130) at the GA's
+resolution (100 samples per step, the one-sided limits at phase changes and the
+margin refinement), on ``threads`` threads, with ``ns_per_sample`` (thread-time
+per sample) and ``samples_per_eval`` (including the refinement's extra samples);
+``numpy_evals_per_s``: the numpy reference (``planner/reference.py``) on the same
+population in the same run, and ``speedup`` of the kernel over it. ``compile_s``:
+the first plan and the first population score in a fresh process with an empty
+numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same first
+calls in a fresh process once that cache is filled; ``cached_process_s``: that
+whole process, interpreter and imports included.
 
-``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s``,
-``evals_per_s``).
+``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s`` of
+the search, ``process_wall_s`` of a fresh ``python`` process doing it, start-up
+included, and ``driver_ms_per_gen``, the time per generation spent outside the
+planner: pymoo's operators, the objective treatment and the log).
 
 ``sweep``: the default sweep end to end on all cores (``trials``, ``wall_s``,
 ``trials_per_s``) and its simulated steps per second as a share of the raw
@@ -18,13 +27,20 @@ allocated meanwhile), which was 134 s and 2.75 GB when grids were expanded.
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
 
+from planner.kernel.run import kernel_walk
 from planner.plan import evaluate, plan_walk
+from planner.reference import evaluate_reference
 from planner.spec import load_spec
-from planner.trajectory import GaitParams
+from planner.trajectory import GaitParams, Timeline
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 POPULATION = 130  # the paper's GA population
@@ -53,32 +69,64 @@ def random_population(spec, size: int, seed: int = 0) -> np.ndarray:
     )
 
 
+_FIRST_CALLS = """
+import json, time
+start = time.perf_counter()
+import numpy as np
+from planner.plan import evaluate, plan_walk
+from planner.spec import load_spec
+from planner.trajectory import GaitParams
+spec = load_spec()
+imported = time.perf_counter()
+plan_walk(spec, GaitParams.nominal(spec, 1.0))
+evaluate(spec, GaitParams.nominal(spec, 1.0, dt=0.01), np.array([[0.2, 0.06, 0.2]]))
+done = time.perf_counter()
+print(json.dumps({"import_s": imported - start, "first_calls_s": done - imported}))
+"""
+
+
+def _fresh_process(cache: str) -> tuple[dict, float]:
+    """Run the first calls in a new interpreter with NUMBA_CACHE_DIR=cache; (figures, wall)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    start = time.perf_counter()
+    out = subprocess.run(
+        [sys.executable, "-c", _FIRST_CALLS], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout), time.perf_counter() - start
+
+
 def planner_figures() -> dict:
+    import numba
+
+    with tempfile.TemporaryDirectory() as cache:
+        cold, _ = _fresh_process(cache)
+        warm, warm_wall = _fresh_process(cache)
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
-    plan_s = _best_of(lambda: plan_walk(spec, params), 5)
+    plan_walk(spec, params)
+    plan_s = _best_of(lambda: plan_walk(spec, params), 20)
     coarse = GaitParams.nominal(spec, NOMINAL_STEP_TIME, dt=NOMINAL_STEP_TIME / SAMPLES_PER_STEP)
     population = random_population(spec, POPULATION)
-    batch_s = _best_of(lambda: evaluate(spec, coarse, population), 3)
-
-    def loop():
-        for hz, lift, tilt in population:
-            plan_walk(
-                spec,
-                GaitParams.nominal(
-                    spec, NOMINAL_STEP_TIME, dt=coarse.dt, hip_height=hz, swing_lift=lift, tilt=tilt
-                ),
-            )
-
-    loop_s = _best_of(loop, 1)
+    evaluate(spec, coarse, population)
+    batch_s = _best_of(lambda: evaluate(spec, coarse, population), 10)
+    numpy_s = _best_of(lambda: evaluate_reference(spec, coarse, population), 3)
+    walk = kernel_walk(spec, Timeline.of(coarse))
+    per_eval = float(walk.scores(coarse.slope, population, counts=True)[3].mean())
+    threads = numba.get_num_threads()
     return {
         "plan_samples": plan_walk(spec, params).t.size,
         "plan_ms": plan_s * 1e3,
         "population": POPULATION,
-        "samples_per_eval": coarse.steps * SAMPLES_PER_STEP + int(0.4 * SAMPLES_PER_STEP) + 1,
+        "threads": threads,
+        "samples_per_eval": per_eval,
         "evals_per_s": POPULATION / batch_s,
-        "loop_evals_per_s": POPULATION / loop_s,
-        "speedup_vs_loop": loop_s / batch_s,
+        "ns_per_sample": batch_s * threads / (POPULATION * per_eval) * 1e9,
+        "numpy_evals_per_s": POPULATION / numpy_s,
+        "speedup": numpy_s / batch_s,
+        "compile_s": cold["first_calls_s"],
+        "cached_start_s": warm["first_calls_s"],
+        "cached_process_s": warm_wall,
+        "load_1min": os.getloadavg()[0],
     }
 
 
@@ -148,25 +196,68 @@ def sim_figures() -> dict:
 GA_SLOPE_DEG = 22.5  # the paper's re-optimised case
 
 
-def ga_figures() -> dict:
-    """The paper's full GA (130 x 500 = 65,000 evaluations) at 22.5 deg, timed once.
+_GA_PROCESS = """
+import json, time
+start = time.perf_counter()
+import numpy as np
+from bench.experiments.ga import GaSettings, run_ga
+from planner.gait_search import GaitProblem, ga_params
+from planner.spec import load_spec
+spec = load_spec()
+problem = GaitProblem(spec, ga_params(spec, 1.0, np.deg2rad(%r)))
+result = run_ga(problem, GaSettings())
+print(json.dumps({"wall_s": time.perf_counter() - start, "feasible": bool(result.best.feasible)}))
+"""
 
-    ``wall_s`` covers the whole search (pymoo's operators included); ``feasible``
-    and ``work_J`` say what it found, so a fast but broken run shows.
+
+class _TimedProblem:
+    """A problem whose ``measure`` calls are timed (to split the GA's wall time)."""
+
+    def __init__(self, problem):
+        self.inner, self.bounds, self.seconds = problem, problem.bounds, 0.0
+
+    def measure(self, X):
+        start = time.perf_counter()
+        out = self.inner.measure(X)
+        self.seconds += time.perf_counter() - start
+        return out
+
+
+def ga_figures() -> dict:
+    """The paper's full GA (130 x 500 = 65,000 evaluations) at 22.5 deg.
+
+    ``wall_s`` covers the search in this process (pymoo's operators included);
+    ``process_wall_s`` a fresh interpreter importing everything and running the same
+    search (warm numba cache); ``measure_s`` the planner's share of ``wall_s`` and
+    ``driver_ms_per_gen`` the rest per generation. ``feasible`` and ``work_J`` say
+    what it found, so a fast but broken run shows.
     """
     from bench.experiments.ga import GaSettings, run_ga
     from planner.gait_search import GaitProblem, ga_params
 
     spec = load_spec()
     problem = GaitProblem(spec, ga_params(spec, NOMINAL_STEP_TIME, np.deg2rad(GA_SLOPE_DEG)))
-    result = run_ga(problem, GaSettings())
+    problem.measure(problem.bounds.xl[None])  # load the compiled kernel
+    timed = _TimedProblem(problem)
+    settings = GaSettings()
+    result = run_ga(timed, settings)
+    start = time.perf_counter()
+    code = _GA_PROCESS % GA_SLOPE_DEG
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    process_wall = time.perf_counter() - start
     return {
         "slope_deg": GA_SLOPE_DEG,
         "evaluations": result.evaluations,
         "wall_s": result.wall_s,
         "evals_per_s": result.evals_per_s,
+        "measure_s": timed.seconds,
+        "driver_ms_per_gen": (result.wall_s - timed.seconds) / settings.generations * 1e3,
+        "process_wall_s": process_wall,
+        "process_same_verdict": json.loads(out.stdout)["feasible"] == result.best.feasible,
         "feasible": result.best.feasible,
         "work_J": result.best.work,
+        "margin_mm": result.best.margin * 1e3,
+        "load_1min": os.getloadavg()[0],
     }
 
 

@@ -29,6 +29,7 @@ from planner.trajectory import Timeline
 
 REFINE_ITERATIONS = 12  # parabolic steps per local minimum at most
 REFINE_TOL = 1e-7  # [s] stop when the bracket's best point moves less than this
+SERIES_BLOCK = 256  # samples per task of ``series`` at least
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -45,13 +46,20 @@ def _footprints(landing, tilt, hip_width):
 
 @njit(cache=True, parallel=True, error_model="numpy")
 def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, pieces, times):
-    """Rows of every sample for every individual, shape (P, n, ROW)."""
+    """Rows of every sample for every individual, shape (P, n, ROW).
+
+    The work is split into (individual, block of samples) tasks, so one long plan
+    uses every thread too.
+    """
     P, n = X.shape[0], times.size
     out = np.empty((P, n, sm.ROW))
-    for p in prange(P):
+    blocks = max(1, min(n // SERIES_BLOCK, 64 // P))
+    size = -(-n // blocks)
+    for task in prange(P * blocks):
+        p, b = task // blocks, task % blocks
         work = np.empty((sm.SCRATCH, 16))
         y = _footprints(landing, X[p, 2], geometry[tb.HIP_WIDTH])
-        for j in range(n):
+        for j in range(b * size, min(n, (b + 1) * size)):
             sm.evaluate_sample(
                 pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, X[p],
                 pieces[j], times[j], out[p, j], work,
@@ -70,11 +78,16 @@ def _margin_at(args, x, y, piece, t, row, work):
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
-    """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search)."""
+    """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search).
+
+    Returns (margin [m], samples evaluated).
+    """
     t1a = args[0][pa, tb.T1]
     best = fb
     a, b, c = ta, tb_, tc
+    count = 0
     for _ in range(REFINE_ITERATIONS):
+        count += 1
         num = (b - a) ** 2 * (fb - fc) - (b - c) ** 2 * (fb - fa)
         den = (b - a) * (fb - fc) - (b - c) * (fb - fa)
         u = b - 0.5 * num / den if den != 0 else np.nan
@@ -96,7 +109,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
         best = min(best, fu)
         if moved < REFINE_TOL:
             break
-    return best
+    return best, count
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -106,11 +119,12 @@ def _refine_all(args, x, y, pieces, times, margin, row, work):
     Interior minima are bracketed by their two neighbours. At the ends of a phase
     (where the one-sided limits sit) a probe a thousandth of the sample spacing
     inside tells whether the margin still falls going inwards; if it does, the
-    bracket is (end, probe, next sample).
+    bracket is (end, probe, next sample). Returns (margin [m], samples evaluated).
     """
     pi = args[1]
     n = times.size
     low = np.inf
+    count = 0
     for j in range(n):
         ph = pi[pieces[j], tb.PHASE]
         left = j > 0 and pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
@@ -121,26 +135,28 @@ def _refine_all(args, x, y, pieces, times, margin, row, work):
                     args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j],
                     times[j], margin[j], pieces[j + 1], times[j + 1], margin[j + 1], row, work,
                 )  # fmt: skip
-                low = min(low, found)
+                low, count = min(low, found[0]), count + found[1]
         elif right and margin[j] <= margin[j + 1]:  # first sample of a phase
             u = times[j] + 1e-3 * (times[j + 1] - times[j])
             fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            count += 1
             if fu < margin[j]:
                 found = _refine(
                     args, x, y, pieces[j], times[j], margin[j], pieces[j], u, fu,
                     pieces[j + 1], times[j + 1], margin[j + 1], row, work,
                 )  # fmt: skip
-                low = min(low, found)
+                low, count = min(low, found[0]), count + found[1]
         elif left and margin[j] <= margin[j - 1]:  # last sample of a phase
             u = times[j] - 1e-3 * (times[j] - times[j - 1])
             fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            count += 1
             if fu < margin[j]:
                 found = _refine(
                     args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], u, fu,
                     pieces[j], times[j], margin[j], row, work,
                 )  # fmt: skip
-                low = min(low, found)
-    return low
+                low, count = min(low, found[0]), count + found[1]
+    return low, count
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -148,7 +164,7 @@ def scores(
     pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, limits, X, pieces, times,
     refine,
 ):  # fmt: skip
-    """Work [J], minimum margin [m], joint gap [rad] per individual, each shape (P,).
+    """Work [J], minimum margin [m], joint gap [rad], samples evaluated, each shape (P,).
 
     ``limits``: (lower, upper) [rad] of each Table-I joint, shape (8, 2); the gap is the
     worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples.
@@ -156,6 +172,7 @@ def scores(
     """
     P, n = X.shape[0], times.size
     work_out, margin_out, gap_out = np.empty(P), np.empty(P), np.empty(P)
+    count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
     for p in prange(P):
         work = np.empty((sm.SCRATCH, 16))
@@ -188,9 +205,11 @@ def scores(
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
         if refine:
-            low = min(low, _refine_all(args, x, y, pieces, times, margin, row, work))
+            found, extra = _refine_all(args, x, y, pieces, times, margin, row, work)
+            low = min(low, found)
+            count_out[p] += extra
         work_out[p], margin_out[p], gap_out[p] = total, low, gap
-    return work_out, margin_out, gap_out
+    return work_out, margin_out, gap_out, count_out
 
 
 @dataclass(frozen=True)
@@ -237,16 +256,18 @@ class KernelWalk:
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         return series(*self._args(slope), X, *self.grid)
 
-    def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True):
+    def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False):
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
 
         Args:
             samples: "limit" (the GA's: grid plus one-sided limits) or "grid".
             refine: Refine the margin at every local minimum between samples.
+            counts: Also return the samples evaluated per individual, (P,).
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         pieces, times = self.limit if samples == "limit" else self.grid
-        return scores(*self._args(slope), self.limits, X, pieces, times, refine)
+        out = scores(*self._args(slope), self.limits, X, pieces, times, refine)
+        return out if counts else out[:3]
 
 
 _WALKS: dict = {}

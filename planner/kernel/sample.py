@@ -46,11 +46,12 @@ _KW = {"cache": True, "error_model": "numpy", "nogil": True}
 
 
 @njit(**_KW)
-def _cubic(c, tau):
-    """Value and first two τ-derivatives of c0 + c1 τ + c2 τ² + c3 τ³."""
-    p = c[0] + tau * (c[1] + tau * (c[2] + tau * c[3]))
-    v = c[1] + tau * (2.0 * c[2] + 3.0 * tau * c[3])
-    a = 2.0 * c[2] + 6.0 * tau * c[3]
+def _cubic(pf, piece, col, tau):
+    """Value and first two τ-derivatives of c0 + c1 τ + c2 τ² + c3 τ³ (pf[piece, col:col+4])."""
+    c0, c1, c2, c3 = pf[piece, col], pf[piece, col + 1], pf[piece, col + 2], pf[piece, col + 3]
+    p = c0 + tau * (c1 + tau * (c2 + tau * c3))
+    v = c1 + tau * (2.0 * c2 + 3.0 * tau * c3)
+    a = 2.0 * c2 + 6.0 * tau * c3
     return p, v, a
 
 
@@ -122,20 +123,19 @@ def evaluate_sample(
         work: Scratch, (SCRATCH, 16): rows 0-9 the frames (rotation row-major, then the
             origin), rows 10-18 the links, row 19 the torques, row 20 the polygon.
     """
-    f = pf[piece]
-    tau = t - f[tb.T0]
+    tau = t - pf[piece, tb.T0]
     side = pi[piece, tb.SIDE]
     l1, l2 = geometry[tb.SHANK], geometry[tb.THIGH]
     lh, lan = geometry[tb.HIP_WIDTH], geometry[tb.ANKLE_HEIGHT]
     hz, lift, tilt = x[0], x[1], x[2]
-    towards = f[tb.TOWARDS]
+    towards = pf[piece, tb.TOWARDS]
 
     # ---- gait at t (closed form)
-    hxp, hxv, hxa = _cubic(f[tb.HIP_X : tb.HIP_X + 4], tau)
-    sxp, sxv, sxa = _cubic(f[tb.SWING_X : tb.SWING_X + 4], tau)
-    lp, lv, la = _cubic(f[tb.LIFT : tb.LIFT + 4], tau)
-    mp, mv, ma = _cubic(f[tb.TILT : tb.TILT + 4], tau)
-    share = _cubic(f[tb.SHARE : tb.SHARE + 4], tau)[0]
+    hxp, hxv, hxa = _cubic(pf, piece, tb.HIP_X, tau)
+    sxp, sxv, sxa = _cubic(pf, piece, tb.SWING_X, tau)
+    lp, lv, la = _cubic(pf, piece, tb.LIFT, tau)
+    mp, mv, ma = _cubic(pf, piece, tb.TILT, tau)
+    share = _cubic(pf, piece, tb.SHARE, tau)[0]
     lam, lamv, lama = tilt * mp, tilt * mv, tilt * ma
     sl, cl = np.sin(lam), np.cos(lam)
     zp, zv, za = _tilted_height(lift * lp, lift * lv, lift * la, towards * lh, sl, cl, lamv, lama)
@@ -159,7 +159,7 @@ def evaluate_sample(
     sth = (sl, -ss, s3, st, st2, s6, ss2, sl)
     # frame 0: columns x0 = z_S, y0 = −y_S, z0 = x_S; origin at the stance ankle
     ys = landing_y[pi[piece, tb.FOOT]]
-    xs = f[tb.STANCE_X]
+    xs = pf[piece, tb.STANCE_X]
     x0, x1, x2 = 0.0, 0.0, 1.0
     y0, y1, y2 = 0.0, -1.0, 0.0
     z0, z1, z2 = 1.0, 0.0, 0.0
@@ -193,18 +193,17 @@ def evaluate_sample(
     row[SWING_SOLE], row[SWING_SOLE + 1], row[SWING_SOLE + 2] = w0, w1, w2
 
     _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, xs, ys, share, row)
-    _polygon_margin(geometry, xs, ys, w0, w1, w2, pi[piece, tb.SSP] == 0, row, work[20])
+    _polygon_margin(geometry, xs, ys, w0, w1, w2, pi[piece, tb.SSP] == 0, row, work)
     row[LEG_DISTANCE], row[LEG_DISTANCE + 1] = dst, dsw
 
 
 @njit(**_KW)
 def _store(work, i, x0, x1, x2, y0, y1, y2, z0, z1, z2, o0, o1, o2):
     """Frame i's rotation (rows of R, i.e. R[r, :] = (x_r, y_r, z_r)) and origin into work[i]."""
-    w = work[i]
-    w[0], w[1], w[2] = x0, y0, z0
-    w[3], w[4], w[5] = x1, y1, z1
-    w[6], w[7], w[8] = x2, y2, z2
-    w[9], w[10], w[11] = o0, o1, o2
+    work[i, 0], work[i, 1], work[i, 2] = x0, y0, z0
+    work[i, 3], work[i, 4], work[i, 5] = x1, y1, z1
+    work[i, 6], work[i, 7], work[i, 8] = x2, y2, z2
+    work[i, 9], work[i, 10], work[i, 11] = o0, o1, o2
 
 
 @njit(**_KW)
@@ -212,17 +211,19 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
     """Newton-Euler recursion in S, DSP split, torques, ZMP, forces, power (module doc)."""
     n_link = 9
     # per link: c (3), com acc with the gravity trick (3), momentum rate (3), axis (3)
-    lk = work[10:19]
     wx = wy = wz = 0.0  # ω
     dx = dy = dz = 0.0  # ω̇
     ax, ay, az = -gravity[0], -gravity[1], -gravity[2]
     for i in range(n_link):
-        R = work[i]
-        ux, uy, uz = R[2], R[5], R[8]  # z_i
+        ux, uy, uz = work[i, 2], work[i, 5], work[i, 8]  # z_i
         if i > 0:
             sign = -1.0 if (i == 1 or i >= 5) else 1.0
             ux, uy, uz = sign * ux, sign * uy, sign * uz
-            rx, ry, rz = R[9] - work[i - 1, 9], R[10] - work[i - 1, 10], R[11] - work[i - 1, 11]
+            rx, ry, rz = (
+                work[i, 9] - work[i - 1, 9],
+                work[i, 10] - work[i - 1, 10],
+                work[i, 11] - work[i - 1, 11],
+            )
             t0, t1, t2 = _cross(wx, wy, wz, rx, ry, rz)
             e0, e1, e2 = _cross(dx, dy, dz, rx, ry, rz)
             g0, g1, g2 = _cross(wx, wy, wz, t0, t1, t2)
@@ -233,57 +234,62 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
             dx, dy, dz = dx + h0 + q2 * ux, dy + h1 + q2 * uy, dz + h2 + q2 * uz
             wx, wy, wz = wx + sx, wy + sy, wz + sz
         cb0, cb1, cb2 = com[side, i, 0], com[side, i, 1], com[side, i, 2]
-        cx = R[0] * cb0 + R[1] * cb1 + R[2] * cb2
-        cy = R[3] * cb0 + R[4] * cb1 + R[5] * cb2
-        cz = R[6] * cb0 + R[7] * cb1 + R[8] * cb2
+        cx = work[i, 0] * cb0 + work[i, 1] * cb1 + work[i, 2] * cb2
+        cy = work[i, 3] * cb0 + work[i, 4] * cb1 + work[i, 5] * cb2
+        cz = work[i, 6] * cb0 + work[i, 7] * cb1 + work[i, 8] * cb2
         t0, t1, t2 = _cross(wx, wy, wz, cx, cy, cz)
         e0, e1, e2 = _cross(dx, dy, dz, cx, cy, cz)
         g0, g1, g2 = _cross(wx, wy, wz, t0, t1, t2)
         # Ḣ = R I Rᵀ ω̇ + ω × R I Rᵀ ω
         Ic = inertia[i]
-        lw0 = R[0] * wx + R[3] * wy + R[6] * wz
-        lw1 = R[1] * wx + R[4] * wy + R[7] * wz
-        lw2 = R[2] * wx + R[5] * wy + R[8] * wz
-        ld0 = R[0] * dx + R[3] * dy + R[6] * dz
-        ld1 = R[1] * dx + R[4] * dy + R[7] * dz
-        ld2 = R[2] * dx + R[5] * dy + R[8] * dz
+        lw0 = work[i, 0] * wx + work[i, 3] * wy + work[i, 6] * wz
+        lw1 = work[i, 1] * wx + work[i, 4] * wy + work[i, 7] * wz
+        lw2 = work[i, 2] * wx + work[i, 5] * wy + work[i, 8] * wz
+        ld0 = work[i, 0] * dx + work[i, 3] * dy + work[i, 6] * dz
+        ld1 = work[i, 1] * dx + work[i, 4] * dy + work[i, 7] * dz
+        ld2 = work[i, 2] * dx + work[i, 5] * dy + work[i, 8] * dz
         iw0 = Ic[0, 0] * lw0 + Ic[0, 1] * lw1 + Ic[0, 2] * lw2
         iw1 = Ic[1, 0] * lw0 + Ic[1, 1] * lw1 + Ic[1, 2] * lw2
         iw2 = Ic[2, 0] * lw0 + Ic[2, 1] * lw1 + Ic[2, 2] * lw2
         id0 = Ic[0, 0] * ld0 + Ic[0, 1] * ld1 + Ic[0, 2] * ld2
         id1 = Ic[1, 0] * ld0 + Ic[1, 1] * ld1 + Ic[1, 2] * ld2
         id2 = Ic[2, 0] * ld0 + Ic[2, 1] * ld1 + Ic[2, 2] * ld2
-        Iw0 = R[0] * iw0 + R[1] * iw1 + R[2] * iw2
-        Iw1 = R[3] * iw0 + R[4] * iw1 + R[5] * iw2
-        Iw2 = R[6] * iw0 + R[7] * iw1 + R[8] * iw2
-        Id0 = R[0] * id0 + R[1] * id1 + R[2] * id2
-        Id1 = R[3] * id0 + R[4] * id1 + R[5] * id2
-        Id2 = R[6] * id0 + R[7] * id1 + R[8] * id2
+        Iw0 = work[i, 0] * iw0 + work[i, 1] * iw1 + work[i, 2] * iw2
+        Iw1 = work[i, 3] * iw0 + work[i, 4] * iw1 + work[i, 5] * iw2
+        Iw2 = work[i, 6] * iw0 + work[i, 7] * iw1 + work[i, 8] * iw2
+        Id0 = work[i, 0] * id0 + work[i, 1] * id1 + work[i, 2] * id2
+        Id1 = work[i, 3] * id0 + work[i, 4] * id1 + work[i, 5] * id2
+        Id2 = work[i, 6] * id0 + work[i, 7] * id1 + work[i, 8] * id2
         k0, k1, k2 = _cross(wx, wy, wz, Iw0, Iw1, Iw2)
-        L = lk[i]
-        L[0], L[1], L[2] = cx, cy, cz
-        L[3], L[4], L[5] = ax + e0 + g0, ay + e1 + g1, az + e2 + g2
-        L[6], L[7], L[8] = Id0 + k0, Id1 + k1, Id2 + k2
-        L[9], L[10], L[11] = ux, uy, uz
+        work[10 + i, 0], work[10 + i, 1], work[10 + i, 2] = cx, cy, cz
+        work[10 + i, 3], work[10 + i, 4], work[10 + i, 5] = ax + e0 + g0, ay + e1 + g1, az + e2 + g2
+        work[10 + i, 6], work[10 + i, 7], work[10 + i, 8] = Id0 + k0, Id1 + k1, Id2 + k2
+        work[10 + i, 9], work[10 + i, 10], work[10 + i, 11] = ux, uy, uz
 
     # ---- inward: f, m about origin i; τ_i = m · u_i
     fx = fy = fz = 0.0
     mx = my = mz = 0.0
-    tau = work[19]
     for i in range(n_link - 1, -1, -1):
-        L, R = lk[i], work[i]
         m_i = mass[i]
-        Fx, Fy, Fz = m_i * L[3], m_i * L[4], m_i * L[5]
+        Fx, Fy, Fz = m_i * work[10 + i, 3], m_i * work[10 + i, 4], m_i * work[10 + i, 5]
         if i == n_link - 1:
-            px, py, pz = w0 - R[9], w1 - R[10], w2 - R[11]
+            px, py, pz = w0 - work[i, 9], w1 - work[i, 10], w2 - work[i, 11]
         else:
-            px, py, pz = work[i + 1, 9] - R[9], work[i + 1, 10] - R[10], work[i + 1, 11] - R[11]
-        c0, c1, c2 = _cross(L[0], L[1], L[2], Fx, Fy, Fz)
+            px, py, pz = (
+                work[i + 1, 9] - work[i, 9],
+                work[i + 1, 10] - work[i, 10],
+                work[i + 1, 11] - work[i, 11],
+            )
+        c0, c1, c2 = _cross(work[10 + i, 0], work[10 + i, 1], work[10 + i, 2], Fx, Fy, Fz)
         r0, r1, r2 = _cross(px, py, pz, fx, fy, fz)
-        mx, my, mz = L[6] + c0 + mx + r0, L[7] + c1 + my + r1, L[8] + c2 + mz + r2
+        mx, my, mz = (
+            work[10 + i, 6] + c0 + mx + r0,
+            work[10 + i, 7] + c1 + my + r1,
+            work[10 + i, 8] + c2 + mz + r2,
+        )
         fx, fy, fz = Fx + fx, Fy + fy, Fz + fz
         if i >= 1:
-            tau[i - 1] = mx * L[9] + my * L[10] + mz * L[11]
+            work[19, i - 1] = mx * work[10 + i, 9] + my * work[10 + i, 10] + mz * work[10 + i, 11]
     # moment about the stance sole point (x0 points up, so the sole is o0 − Lan z_S)
     lan = work[0, 11]
     sm0, sm1, sm2 = _cross(0.0, 0.0, lan, fx, fy, fz)
@@ -295,9 +301,12 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
     Ms0, Ms1, Ms2 = other * (sm0 + e0), other * (sm1 + e1), other * (sm2 + e2)
     power = 0.0
     for i in range(1, n_link):
-        R, L = work[i], lk[i]
-        c0, c1, c2 = _cross(w0 - R[9], w1 - R[10], w2 - R[11], Fs0, Fs1, Fs2)
-        t_i = tau[i - 1] - (L[9] * (c0 + Ms0) + L[10] * (c1 + Ms1) + L[11] * (c2 + Ms2))
+        c0, c1, c2 = _cross(w0 - work[i, 9], w1 - work[i, 10], w2 - work[i, 11], Fs0, Fs1, Fs2)
+        t_i = work[19, i - 1] - (
+            work[10 + i, 9] * (c0 + Ms0)
+            + work[10 + i, 10] * (c1 + Ms1)
+            + work[10 + i, 11] * (c2 + Ms2)
+        )
         row[TAU + i - 1] = t_i
         p_i = abs(t_i * qd[i - 1])
         row[POWER_JOINTS + i - 1] = p_i
@@ -314,15 +323,18 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
     hx = hy = 0.0
     mt = cmx = cmy = cmz = amx = amy = amz = 0.0
     for i in range(n_link):
-        L, R = lk[i], work[i]
         m_i = mass[i]
-        px, py, pz = R[9] + L[0], R[10] + L[1], R[11] + L[2]
-        gx, gy, gz = L[3], L[4], L[5]  # a − g
+        px, py, pz = (
+            work[i, 9] + work[10 + i, 0],
+            work[i, 10] + work[10 + i, 1],
+            work[i, 11] + work[10 + i, 2],
+        )
+        gx, gy, gz = work[10 + i, 3], work[10 + i, 4], work[10 + i, 5]  # a − g
         den += m_i * gz
         num_x += m_i * (px * gz - gx * pz)
         num_y += m_i * (py * gz - gy * pz)
-        hx += L[6]
-        hy += L[7]
+        hx += work[10 + i, 6]
+        hy += work[10 + i, 7]
         mt += m_i
         cmx, cmy, cmz = cmx + m_i * px, cmy + m_i * py, cmz + m_i * pz
         amx, amy, amz = amx + m_i * gx, amy + m_i * gy, amz + m_i * gz
@@ -339,7 +351,7 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
 
 
 @njit(**_KW)
-def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, poly):
+def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work):
     """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP."""
     heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
     dx = (w0 - xs) if double else 0.0
@@ -348,24 +360,29 @@ def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, poly):
     cy = (-half, half, half, -half)
     nx = (1.0, 0.0, -1.0, 0.0)  # outward normals of the edges i → i+1
     ny = (0.0, 1.0, 0.0, -1.0)
-    poly = poly.reshape((8, 2))
     for i in range(4):
         incoming = dx * nx[i - 1] + dy * ny[i - 1] > 0
         outgoing = dx * nx[i] + dy * ny[i] > 0
         vx, vy = xs + cx[i], ys + cy[i]
-        poly[2 * i, 0] = vx + dx if incoming else vx
-        poly[2 * i, 1] = vy + dy if incoming else vy
-        poly[2 * i + 1, 0] = vx + dx if outgoing else vx
-        poly[2 * i + 1, 1] = vy + dy if outgoing else vy
+        work[20, 2 * (2 * i) + 0] = vx + dx if incoming else vx
+        work[20, 2 * (2 * i) + 1] = vy + dy if incoming else vy
+        work[20, 2 * (2 * i + 1) + 0] = vx + dx if outgoing else vx
+        work[20, 2 * (2 * i + 1) + 1] = vy + dy if outgoing else vy
     px, py = row[ZMP], row[ZMP + 1]
     line_min = np.inf
     seg = np.inf
     for i in range(8):
-        row[POLYGON + 2 * i], row[POLYGON + 2 * i + 1] = poly[i, 0], poly[i, 1]
+        row[POLYGON + 2 * i], row[POLYGON + 2 * i + 1] = (
+            work[20, 2 * (i) + 0],
+            work[20, 2 * (i) + 1],
+        )
         j = (i + 1) % 8
-        ex, ey = poly[j, 0] - poly[i, 0], poly[j, 1] - poly[i, 1]
+        ex, ey = (
+            work[20, 2 * (j) + 0] - work[20, 2 * (i) + 0],
+            work[20, 2 * (j) + 1] - work[20, 2 * (i) + 1],
+        )
         length = np.sqrt(ex * ex + ey * ey)
-        rx, ry = px - poly[i, 0], py - poly[i, 1]
+        rx, ry = px - work[20, 2 * (i) + 0], py - work[20, 2 * (i) + 1]
         if length > 1e-12:
             line_min = min(line_min, (ex * ry - ey * rx) / length)
             s = min(max((rx * ex + ry * ey) / (length * length), 0.0), 1.0)
