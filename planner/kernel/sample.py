@@ -241,19 +241,15 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
         e0, e1, e2 = _cross(dx, dy, dz, cx, cy, cz)
         g0, g1, g2 = _cross(wx, wy, wz, t0, t1, t2)
         # Ḣ = R I Rᵀ ω̇ + ω × R I Rᵀ ω
-        Ic = inertia[i]
+        i0, i1, i2 = inertia[i, 0], inertia[i, 1], inertia[i, 2]  # principal, DH axes
         lw0 = work[i, 0] * wx + work[i, 3] * wy + work[i, 6] * wz
         lw1 = work[i, 1] * wx + work[i, 4] * wy + work[i, 7] * wz
         lw2 = work[i, 2] * wx + work[i, 5] * wy + work[i, 8] * wz
         ld0 = work[i, 0] * dx + work[i, 3] * dy + work[i, 6] * dz
         ld1 = work[i, 1] * dx + work[i, 4] * dy + work[i, 7] * dz
         ld2 = work[i, 2] * dx + work[i, 5] * dy + work[i, 8] * dz
-        iw0 = Ic[0, 0] * lw0 + Ic[0, 1] * lw1 + Ic[0, 2] * lw2
-        iw1 = Ic[1, 0] * lw0 + Ic[1, 1] * lw1 + Ic[1, 2] * lw2
-        iw2 = Ic[2, 0] * lw0 + Ic[2, 1] * lw1 + Ic[2, 2] * lw2
-        id0 = Ic[0, 0] * ld0 + Ic[0, 1] * ld1 + Ic[0, 2] * ld2
-        id1 = Ic[1, 0] * ld0 + Ic[1, 1] * ld1 + Ic[1, 2] * ld2
-        id2 = Ic[2, 0] * ld0 + Ic[2, 1] * ld1 + Ic[2, 2] * ld2
+        iw0, iw1, iw2 = i0 * lw0, i1 * lw1, i2 * lw2
+        id0, id1, id2 = i0 * ld0, i1 * ld1, i2 * ld2
         Iw0 = work[i, 0] * iw0 + work[i, 1] * iw1 + work[i, 2] * iw2
         Iw1 = work[i, 3] * iw0 + work[i, 4] * iw1 + work[i, 5] * iw2
         Iw2 = work[i, 6] * iw0 + work[i, 7] * iw1 + work[i, 8] * iw2
@@ -352,7 +348,11 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
 
 @njit(**_KW)
 def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work):
-    """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP."""
+    """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP.
+
+    In SSP the polygon is the stance sole's rectangle (its repeated vertices kept in
+    the row, as ``support_polygon`` writes them) and the margin has a closed form.
+    """
     heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
     dx = (w0 - xs) if double else 0.0
     dy = (w1 - ys) if double else 0.0
@@ -369,27 +369,40 @@ def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work):
         work[20, 2 * (2 * i + 1) + 0] = vx + dx if outgoing else vx
         work[20, 2 * (2 * i + 1) + 1] = vy + dy if outgoing else vy
     px, py = row[ZMP], row[ZMP + 1]
-    line_min = np.inf
-    seg = np.inf
-    for i in range(8):
-        row[POLYGON + 2 * i], row[POLYGON + 2 * i + 1] = (
-            work[20, 2 * (i) + 0],
-            work[20, 2 * (i) + 1],
-        )
-        j = (i + 1) % 8
-        ex, ey = (
-            work[20, 2 * (j) + 0] - work[20, 2 * (i) + 0],
-            work[20, 2 * (j) + 1] - work[20, 2 * (i) + 1],
-        )
-        length = np.sqrt(ex * ex + ey * ey)
-        rx, ry = px - work[20, 2 * (i) + 0], py - work[20, 2 * (i) + 1]
-        if length > 1e-12:
-            line_min = min(line_min, (ex * ry - ey * rx) / length)
-            s = min(max((rx * ex + ry * ey) / (length * length), 0.0), 1.0)
-        else:
-            s = 0.0
-        gx, gy = rx - s * ex, ry - s * ey
-        seg = min(seg, np.sqrt(gx * gx + gy * gy))
-    row[MARGIN] = line_min if line_min >= 0 else -seg
+    for i in range(16):
+        row[POLYGON + i] = work[20, i]
+    if not double:  # the stance sole alone: an axis-aligned rectangle, in closed form
+        rx0, rx1 = px - (xs - heel), (xs + toe) - px
+        ry0, ry1 = py - (ys - half), (ys + half) - py
+        inside = min(min(rx0, rx1), min(ry0, ry1))
+        ox, oy = max(max(-rx0, -rx1), 0.0), max(max(-ry0, -ry1), 0.0)
+        row[MARGIN] = inside if inside >= 0 else -np.sqrt(ox * ox + oy * oy)
+    else:
+        row[MARGIN] = _convex_margin(work, px, py)
     if np.isnan(px) or np.isnan(py):
         row[MARGIN] = np.nan
+
+
+@njit(**_KW)
+def _convex_margin(work, px, py):
+    """Signed distance [m] of (px, py) to the 8-vertex polygon in work[20] (repeats allowed)."""
+    line_min = np.inf
+    for i in range(8):
+        j = (i + 1) % 8
+        ex, ey = work[20, 2 * j] - work[20, 2 * i], work[20, 2 * j + 1] - work[20, 2 * i + 1]
+        length = np.sqrt(ex * ex + ey * ey)
+        if length > 1e-12:
+            rx, ry = px - work[20, 2 * i], py - work[20, 2 * i + 1]
+            line_min = min(line_min, (ex * ry - ey * rx) / length)
+    if line_min >= 0:
+        return line_min
+    seg2 = np.inf
+    for i in range(8):
+        j = (i + 1) % 8
+        ex, ey = work[20, 2 * j] - work[20, 2 * i], work[20, 2 * j + 1] - work[20, 2 * i + 1]
+        rx, ry = px - work[20, 2 * i], py - work[20, 2 * i + 1]
+        length2 = ex * ex + ey * ey
+        s = min(max((rx * ex + ry * ey) / length2, 0.0), 1.0) if length2 > 1e-24 else 0.0
+        gx, gy = rx - s * ex, ry - s * ey
+        seg2 = min(seg2, gx * gx + gy * gy)
+    return -np.sqrt(seg2)

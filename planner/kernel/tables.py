@@ -158,7 +158,9 @@ class ChainTable:
         a: DH a_{i-1} [m], (8,). d5: DH d of the swing hip row per stance side [m], (2,).
         mass: Link masses of DH frames 0..8 [kg], (9,).
         com: Link CoMs in their DH frame [m], (2, 9, 3).
-        inertia: Inertia about the CoM in DH axes [kg m²], (9, 3, 3).
+        inertia: Principal moments about the CoM along the DH axes [kg m²], (9, 3): the
+            spec's body axes are S-aligned at q = 0, where every DH frame is a signed
+            permutation of S, so the inertia is diagonal in DH axes.
     """
 
     geometry: np.ndarray
@@ -175,6 +177,9 @@ class ChainTable:
         assert np.allclose(chain.theta_offset, _OFFSET)
         assert not np.delete(chain.d, 4, axis=1).any()
         assert np.array_equal(chain.inertia[0], chain.inertia[1])
+        diagonal = np.einsum("kii->ki", chain.inertia[0])
+        off = chain.inertia[0] - np.einsum("ki,ij->kij", diagonal, np.eye(3))
+        assert np.abs(off).max() <= 1e-12 * diagonal.max()
         geometry = np.array(
             [
                 spec.shank,
@@ -192,7 +197,7 @@ class ChainTable:
             chain.d[:, 4].copy(),
             chain.mass.copy(),
             chain.com.copy(),
-            np.ascontiguousarray(chain.inertia[0]),
+            np.ascontiguousarray(diagonal),
         )
 
 
