@@ -11,10 +11,14 @@ GA's samples include both one-sided limits of every phase change
 (``tables.limit_samples``).
 
 The Python side (``KernelWalk``) builds the tables once per robot and timeline.
+Calls into the parallel kernels are serialised by a lock: each already uses every
+core, and numba's fallback threading layer (workqueue) aborts on concurrent
+launches from several Python threads (e.g. a Dask worker's thread pool).
 """
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +34,7 @@ from planner.trajectory import Timeline
 REFINE_ITERATIONS = 12  # parabolic steps per local minimum at most
 REFINE_TOL = 1e-7  # [s] stop when the bracket's best point moves less than this
 SERIES_BLOCK = 256  # samples per task of ``series`` at least
+_LAUNCH = threading.Lock()
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -254,7 +259,8 @@ class KernelWalk:
     def series(self, slope: float, X) -> np.ndarray:
         """Rows (``sample`` layout) at the grid samples, shape (P, n, ROW)."""
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        return series(*self._args(slope), X, *self.grid)
+        with _LAUNCH:
+            return series(*self._args(slope), X, *self.grid)
 
     def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False):
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
@@ -266,7 +272,8 @@ class KernelWalk:
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         pieces, times = self.limit if samples == "limit" else self.grid
-        out = scores(*self._args(slope), self.limits, X, pieces, times, refine)
+        with _LAUNCH:
+            out = scores(*self._args(slope), self.limits, X, pieces, times, refine)
         return out if counts else out[:3]
 
 
