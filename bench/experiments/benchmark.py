@@ -3,8 +3,10 @@
 ``planner``: the compiled kernel (``planner/kernel``). ``plan_ms``: one 4-step walk
 at 1 ms after warm-up; ``evals_per_s``: a GA population (130) at the GA's
 resolution (100 samples per step, the one-sided limits at phase changes and the
-margin refinement), on ``threads`` threads, with ``ns_per_sample`` (thread-time
-per sample) and ``samples_per_eval`` (including the refinement's extra samples);
+margin refinement), on ``threads`` threads, with ``ns_per_sample`` (wall time ×
+threads per sample), ``cpu_ns_per_sample`` and ``evals_per_cpu_s`` (from this
+process's CPU time, which moves less with other jobs' load) and ``samples_per_eval``
+(including the refinement's extra samples);
 ``numpy_evals_per_s``: the numpy reference (``planner/reference.py``) on the same
 population in the same run, and ``speedup`` of the kernel over it. ``compile_s``:
 the first plan and the first population score in a fresh process with an empty
@@ -109,6 +111,10 @@ def planner_figures() -> dict:
     population = random_population(spec, POPULATION)
     evaluate(spec, coarse, population)
     batch_s = _best_of(lambda: evaluate(spec, coarse, population), 10)
+    cpu_start = time.process_time()
+    for _ in range(5):
+        evaluate(spec, coarse, population)
+    batch_cpu_s = (time.process_time() - cpu_start) / 5  # all threads of this process
     numpy_s = _best_of(lambda: evaluate_reference(spec, coarse, population), 3)
     walk = kernel_walk(spec, Timeline.of(coarse))
     per_eval = float(walk.scores(coarse.slope, population, counts=True)[3].mean())
@@ -121,6 +127,8 @@ def planner_figures() -> dict:
         "samples_per_eval": per_eval,
         "evals_per_s": POPULATION / batch_s,
         "ns_per_sample": batch_s * threads / (POPULATION * per_eval) * 1e9,
+        "cpu_ns_per_sample": batch_cpu_s / (POPULATION * per_eval) * 1e9,
+        "evals_per_cpu_s": POPULATION / batch_cpu_s,
         "numpy_evals_per_s": POPULATION / numpy_s,
         "speedup": numpy_s / batch_s,
         "compile_s": cold["first_calls_s"],
