@@ -6,9 +6,15 @@ rows per individual to the GA's numbers - joint work Σ∫|τθ̇|dt [J] (trapez
 the samples), minimum ZMP margin [m] and the worst joint-limit excursion [rad] -
 and refines the margin between samples: at every interior local minimum of the
 sampled margin it searches the bracket of the two neighbouring samples by
-safeguarded parabolic interpolation, so a dip between samples is not missed. The
-GA's samples include both one-sided limits of every phase change
-(``tables.limit_samples``).
+safeguarded parabolic interpolation, and at the end of a phase whose margin still
+falls going inwards it does the same between the end and the next sample, so a
+dip between samples is not missed. The GA's samples include both one-sided limits
+of every phase change (``tables.limit_samples``).
+
+Measured (tests/planner/test_kernel.py): at 100 samples per step the refined
+minimum is within 2e-5 mm below a 20 µs brute-force plan's, and never above the
+1 ms plan's, which misses the SSP side of each phase change by up to 1 ms (on
+22.5° that is up to 0.08 mm of margin; more for a near-singular swing leg).
 
 The Python side (``KernelWalk``) builds the tables once per robot and timeline.
 Calls into the parallel kernels are serialised by a lock: each already uses every
