@@ -11,7 +11,7 @@ falls going inwards it does the same between the end and the next sample, so a
 dip between samples is not missed. The GA's samples include both one-sided limits
 of every phase change (``tables.limit_samples``).
 
-Measured (tests/planner/test_kernel.py): at 100 samples per step the refined
+Measured on random admissible gaits at −30…35°: at 100 samples per step the refined
 minimum is within 2e-5 mm below a 20 µs brute-force plan's, and never above the
 1 ms plan's, which misses the SSP side of each phase change by up to 1 ms (on
 22.5° that is up to 0.08 mm of margin; more for a near-singular swing leg).
