@@ -73,7 +73,7 @@ def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, 
         for j in range(b * size, min(n, (b + 1) * size)):
             sm.evaluate_sample(
                 pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, X[p],
-                pieces[j], times[j], out[p, j], work,
+                pieces[j], times[j], out[p, j], work, True,
             )  # fmt: skip
     return out
 
@@ -82,7 +82,7 @@ def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, 
 def _margin_at(args, x, y, piece, t, row, work):
     pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity = args
     sm.evaluate_sample(
-        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work
+        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work, False
     )
     return row[sm.MARGIN]
 
@@ -196,7 +196,7 @@ def scores(
         for j in range(n):
             sm.evaluate_sample(
                 pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x,
-                pieces[j], times[j], row, work,
+                pieces[j], times[j], row, work, False,
             )  # fmt: skip
             margin[j] = row[sm.MARGIN]
             power[j] = row[sm.POWER]

@@ -108,9 +108,13 @@ def _cross(a0, a1, a2, b0, b1, b2):
 
 @njit(**_KW)
 def evaluate_sample(
-    pf, pi, landing_y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work
-):
+    pf, pi, landing_y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work,
+    full,
+):  # fmt: skip
     """Write every series of ``plan.Plan`` at time ``t`` into ``row``.
+
+    With ``full`` False only what the GA reads is written (q, τ, ZMP, margin, power
+    and the leg distances); those values are the same either way.
 
     Args:
         pf, pi: Piece tables (``GaitTable.floats``, ``.ints``).
@@ -122,6 +126,7 @@ def evaluate_sample(
         row: Output, (ROW,), layout in the module constants.
         work: Scratch, (SCRATCH, 16): rows 0-9 the frames (rotation row-major, then the
             origin), rows 10-18 the links, row 19 the torques, row 20 the polygon.
+        full: Write every quantity (a plan) or only the GA's (a score).
     """
     tau = t - pf[piece, tb.T0]
     side = pi[piece, tb.SIDE]
@@ -192,8 +197,10 @@ def evaluate_sample(
     row[STANCE_SOLE], row[STANCE_SOLE + 1], row[STANCE_SOLE + 2] = xs, ys, 0.0
     row[SWING_SOLE], row[SWING_SOLE + 1], row[SWING_SOLE + 2] = w0, w1, w2
 
-    _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, xs, ys, share, row)
-    _polygon_margin(geometry, xs, ys, w0, w1, w2, pi[piece, tb.SSP] == 0, row, work)
+    _newton_euler(
+        work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, xs, ys, share, row, full
+    )
+    _polygon_margin(geometry, xs, ys, w0, w1, w2, pi[piece, tb.SSP] == 0, row, work, full)
     row[LEG_DISTANCE], row[LEG_DISTANCE + 1] = dst, dsw
 
 
@@ -207,7 +214,9 @@ def _store(work, i, x0, x1, x2, y0, y1, y2, z0, z1, z2, o0, o1, o2):
 
 
 @njit(**_KW)
-def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, xs, ys, share, row):
+def _newton_euler(
+    work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, xs, ys, share, row, full
+):
     """Newton-Euler recursion in S, DSP split, torques, ZMP, forces, power (module doc)."""
     n_link = 9
     # per link: c (3), com acc with the gravity trick (3), momentum rate (3), axis (3)
@@ -308,16 +317,10 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
         row[POWER_JOINTS + i - 1] = p_i
         power += p_i
     row[POWER] = power
-    for j in range(3):
-        row[GROUND + j] = (fx, fy, fz)[j]
-        row[SWING_FORCE + j] = (Fs0, Fs1, Fs2)[j]
-        row[STANCE_FORCE + j] = (fx - Fs0, fy - Fs1, fz - Fs2)[j]
-    row[FRICTION] = np.hypot(fx, fy) / fz if fz > 0 else np.inf
 
-    # ---- eq. (4) from link motion, whole-body CoM, LIPM, CoP of the NE wrench
+    # ---- eq. (4) from link motion
     num_x = num_y = den = 0.0
     hx = hy = 0.0
-    mt = cmx = cmy = cmz = amx = amy = amz = 0.0
     for i in range(n_link):
         m_i = mass[i]
         px, py, pz = (
@@ -331,10 +334,29 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
         num_y += m_i * (py * gz - gy * pz)
         hx += work[10 + i, 6]
         hy += work[10 + i, 7]
+    row[ZMP], row[ZMP + 1] = (num_x - hy) / den, (num_y + hx) / den
+    if not full:
+        return
+
+    # ---- ground forces, friction, whole-body CoM, LIPM, CoP of the NE wrench
+    for j in range(3):
+        row[GROUND + j] = (fx, fy, fz)[j]
+        row[SWING_FORCE + j] = (Fs0, Fs1, Fs2)[j]
+        row[STANCE_FORCE + j] = (fx - Fs0, fy - Fs1, fz - Fs2)[j]
+    row[FRICTION] = np.hypot(fx, fy) / fz if fz > 0 else np.inf
+
+    mt = cmx = cmy = cmz = amx = amy = amz = 0.0
+    for i in range(n_link):
+        m_i = mass[i]
+        px, py, pz = (
+            work[i, 9] + work[10 + i, 0],
+            work[i, 10] + work[10 + i, 1],
+            work[i, 11] + work[10 + i, 2],
+        )
+        gx, gy, gz = work[10 + i, 3], work[10 + i, 4], work[10 + i, 5]  # a − g
         mt += m_i
         cmx, cmy, cmz = cmx + m_i * px, cmy + m_i * py, cmz + m_i * pz
         amx, amy, amz = amx + m_i * gx, amy + m_i * gy, amz + m_i * gz
-    row[ZMP], row[ZMP + 1] = (num_x - hy) / den, (num_y + hx) / den
     cmx, cmy, cmz = cmx / mt, cmy / mt, cmz / mt
     amx, amy, amz = amx / mt + gravity[0], amy / mt + gravity[1], amz / mt + gravity[2]
     row[COM], row[COM + 1], row[COM + 2] = cmx, cmy, cmz
@@ -347,13 +369,17 @@ def _newton_euler(work, qd, qdd, side, mass, com, inertia, gravity, w0, w1, w2, 
 
 
 @njit(**_KW)
-def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work):
+def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work, full):
     """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP.
 
     In SSP the polygon is the stance sole's rectangle (its repeated vertices kept in
     the row, as ``support_polygon`` writes them) and the margin has a closed form.
     """
     heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
+    px, py = row[ZMP], row[ZMP + 1]
+    if not (double or full):
+        row[MARGIN] = _rectangle_margin(px, py, xs, ys, heel, toe, half)
+        return
     dx = (w0 - xs) if double else 0.0
     dy = (w1 - ys) if double else 0.0
     cx = (toe, toe, -heel, -heel)
@@ -368,19 +394,24 @@ def _polygon_margin(geometry, xs, ys, w0, w1, w2, double, row, work):
         work[20, 2 * (2 * i) + 1] = vy + dy if incoming else vy
         work[20, 2 * (2 * i + 1) + 0] = vx + dx if outgoing else vx
         work[20, 2 * (2 * i + 1) + 1] = vy + dy if outgoing else vy
-    px, py = row[ZMP], row[ZMP + 1]
     for i in range(16):
         row[POLYGON + i] = work[20, i]
     if not double:  # the stance sole alone: an axis-aligned rectangle, in closed form
-        rx0, rx1 = px - (xs - heel), (xs + toe) - px
-        ry0, ry1 = py - (ys - half), (ys + half) - py
-        inside = min(min(rx0, rx1), min(ry0, ry1))
-        ox, oy = max(max(-rx0, -rx1), 0.0), max(max(-ry0, -ry1), 0.0)
-        row[MARGIN] = inside if inside >= 0 else -np.sqrt(ox * ox + oy * oy)
+        row[MARGIN] = _rectangle_margin(px, py, xs, ys, heel, toe, half)
     else:
         row[MARGIN] = _convex_margin(work, px, py)
     if np.isnan(px) or np.isnan(py):
         row[MARGIN] = np.nan
+
+
+@njit(**_KW)
+def _rectangle_margin(px, py, xs, ys, heel, toe, half):
+    """Signed distance [m] of (px, py) to the sole rectangle around (xs, ys), inside > 0."""
+    rx0, rx1 = px - (xs - heel), (xs + toe) - px
+    ry0, ry1 = py - (ys - half), (ys + half) - py
+    inside = min(min(rx0, rx1), min(ry0, ry1))
+    ox, oy = max(max(-rx0, -rx1), 0.0), max(max(-ry0, -ry1), 0.0)
+    return inside if inside >= 0 else -np.sqrt(ox * ox + oy * oy)
 
 
 @njit(**_KW)
