@@ -193,6 +193,7 @@ def scores(
         x = X[p]
         y = _footprints(landing, x[2], geometry[tb.HIP_WIDTH])
         gap = -np.inf
+        bad = False
         for j in range(n):
             sm.evaluate_sample(
                 pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x,
@@ -200,21 +201,22 @@ def scores(
             )  # fmt: skip
             margin[j] = row[sm.MARGIN]
             power[j] = row[sm.POWER]
+            if np.isnan(margin[j]) or np.isnan(power[j]):  # out of reach: no need to go on
+                bad = True
+                count_out[p] = j + 1
+                break
             for i in range(1, 7):
                 q = row[sm.Q + i]
                 gap = max(gap, limits[i, 0] - q, q - limits[i, 1])
-        total = 0.0
-        low = np.inf
-        bad = False
-        for j in range(n):
-            if np.isnan(margin[j]) or np.isnan(power[j]):
-                bad = True
-            low = min(low, margin[j])
-            if j:
-                total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
+        total = 0.0
+        low = np.inf
+        for j in range(n):
+            low = min(low, margin[j])
+            if j:
+                total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if refine:
             found, extra = _refine_all(args, x, y, pieces, times, margin, row, work)
             low = min(low, found)
