@@ -109,6 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
         "slopewalk trial --step-time 1 --slope 15 --out trial.json",
         "slopewalk trial --step-time 0.5 --friction 0.4 --actuators servo --out t.json \\\n"
         "      --series t.npz --record t.rrd",
+        "slopewalk trial --step-time 0.6 --controller "
+        "bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
     )
     add_gait_flags(p)
     add_sim_flags(p)
@@ -119,6 +121,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="also write a rerun recording (.rrd): the robot on its slope, support polygon, "
         "ZMP and CoP traces, contact forces, joint angles, events",
+    )
+    p.add_argument(
+        "--controller",
+        metavar="MODULE:CALLABLE",
+        help="close the loop: call this function (observation dict -> actuator command, see "
+        "bench/sim/env.py) once per simulation step instead of playing the plan open loop, "
+        "e.g. bench.controllers.ankle_cop:ankle_cop_feedback (default: open loop)",
     )
     p.set_defaults(run=commands.trial)
 

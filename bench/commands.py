@@ -97,8 +97,17 @@ def trial(args) -> None:
         check_output(path, name=flag)
     if args.record is not None:
         record_trial = _recorder("--record")
+    if args.controller is not None:
+        from bench.controllers import load_controller
+
+        load_controller(args.controller)  # a bad name is refused before any work
     spec = load_spec(args.robot)
-    trial = TrialSpec(gait_from_args(args, spec), friction=args.friction, actuators=args.actuators)
+    trial = TrialSpec(
+        gait_from_args(args, spec),
+        friction=args.friction,
+        actuators=args.actuators,
+        controller=args.controller,
+    )
     plan = plan_walk(spec, trial.gait)
     result = run_trial(spec, trial, plan=plan)
     with atomic_paths(*outputs.values()) as tmps:

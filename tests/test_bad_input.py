@@ -64,6 +64,7 @@ INPUTS = {  # file name in {in} -> content
 }
 
 PLAN = ["plan", "--step-time", "1"]
+TRIAL = ["trial", "--step-time", "0.3", "--steps", "1"]
 ROBOT = [*PLAN, "--robot"]
 DEFAULT_OUT = {  # an --out is added where a row has none
     "plan": "{out}/p.npz",
@@ -107,6 +108,25 @@ CASES = [
     (["trial", "--step-time", "1", "--friction", "grippy"], "--friction: 'grippy' is not a number"),
     (["trial", "--step-time", "1", "--slope", "61"], "--slope: 61: must lie in (-60, 60) deg"),
     (["trial", "--step-time", "1", "--actuators", "soft"], "--actuators: invalid choice: 'soft'"),
+    # closed-loop controllers (tests/controller_faults.py holds the misbehaving ones)
+    ([*TRIAL, "--controller", "ankle_cop_feedback"], "'ankle_cop_feedback': must read MODULE:CA"),
+    ([*TRIAL, "--controller", "a b:c"], "controller 'a b:c': must read MODULE:CALLABLE"),
+    ([*TRIAL, "--controller", "no_such_module:f"], "no module named 'no_such_module'"),
+    (
+        [*TRIAL, "--controller", "bench.controllers.ankle_cop:nothing"],
+        "module 'bench.controllers.ankle_cop' has no 'nothing'",
+    ),
+    ([*TRIAL, "--controller", "controller_faults:NOT_CALLABLE"], "is a float, not callable"),
+    (
+        [*TRIAL, "--controller", "controller_faults:seven_numbers"],
+        "at t = 0.000 s: returned an action of shape (7,): must be (8,)",
+    ),
+    ([*TRIAL, "--controller", "controller_faults:nan_command"], "[nan nan nan nan"),
+    ([*TRIAL, "--controller", "controller_faults:words"], "'stand still': not an array of numbers"),
+    (
+        [*TRIAL, "--controller", "controller_faults:raises"],
+        "raised ZeroDivisionError at t = 0.000 s: the user's bug",
+    ),
     (["mjcf", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
     (["mjcf", "--slope", "-60"], "--slope: -60: must lie in (-60, 60) deg"),
     (["mjcf", "--actuators", "hydraulic"], "invalid choice: 'hydraulic'"),

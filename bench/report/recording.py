@@ -18,7 +18,8 @@ Everything lies on the timeline ``time`` [s], walk start = 0. Entities:
   foot, drawn from the foot's CoP at ``FORCE_SCALE`` [m/N].
 * ``joints/<joint>/planned`` and ``.../actual`` [deg] for the 8 MJCF joints;
   ``zmp/{x,y}/{analytic,simulated}`` [mm] in the slope frame S.
-* ``events``: one log line per event (WARN), one INFO line with both verdicts.
+* ``events``: one log line per event (WARN), one INFO line with both verdicts and the
+  controller (or "open loop").
 
 3D entities are sampled at ``frame_rate`` (100 Hz by default); the plots keep
 every sample of the series. Points on the plane are ``p_W = R_WS [x, y, 0]``.
@@ -262,7 +263,8 @@ def _log_events(rec: rr.RecordingStream, result: TrialResult) -> None:
         "events",
         rr.TextLog(
             f"analytic {result.analytic_verdict}, simulated {result.simulated_verdict}; "
-            f"ZMP RMS {result.zmp_rms * 1e3:.2f} mm, max {result.zmp_max * 1e3:.2f} mm",
+            f"ZMP RMS {result.zmp_rms * 1e3:.2f} mm, max {result.zmp_max * 1e3:.2f} mm; "
+            + (f"controller {result.trial.controller}" if result.trial.controller else "open loop"),
             level=rr.TextLogLevel.INFO,
         ),
     )

@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from bench.controllers import check_controller_name
 from bench.sim.events import Event, detect, verdict
 from bench.sim.model import SceneError, check_scene_options
 from bench.sim.playback import Recording, play
@@ -48,14 +49,19 @@ class TrialSpec:
         friction: Coulomb μ of the feet on the plane, > 0.
         actuators: "stiff" or "servo".
         timestep: Simulation step [s].
+        controller: ``MODULE:CALLABLE`` of a closed-loop controller (observation -> action,
+            ``bench.sim.env``), or None: the plan played open loop by ``mujoco.rollout``.
     """
 
     gait: GaitParams
     friction: float = 1.0
     actuators: str = "stiff"
     timestep: float = 0.001
+    controller: str | None = None
 
     def __post_init__(self) -> None:
+        if self.controller is not None:
+            check_controller_name(self.controller)
         if not 0 < self.timestep <= 0.005:
             raise SceneError(f"timestep {self.timestep!r} s: must lie in (0, 0.005]")
         check_scene_options(
@@ -106,6 +112,8 @@ class TrialResult:
             "gait": gait,
             **{k: v for k, v in asdict(self.trial).items() if k != "gait"},
         }
+        if self.trial.controller is None:  # open loop: the output as before controllers
+            del out["trial"]["controller"]
         out["events"] = [{**asdict(e), "phase": self.phase(e.time)} for e in self.events]
         out = json.loads(json.dumps(out, default=float), parse_constant=lambda _: None)
         missing = [k for k, v in out.items() if v is None]
@@ -135,7 +143,8 @@ class TrialResult:
         g = self.trial.gait
         lines = [
             f"trial: {g.steps} steps of {g.step_time:g} s on {np.rad2deg(g.slope):g} deg, "
-            f"mu {self.trial.friction:g}, {self.trial.actuators} actuators",
+            f"mu {self.trial.friction:g}, {self.trial.actuators} actuators"
+            + (f", controller {self.trial.controller}" if self.trial.controller else ""),
             f"analytic:  {self.analytic_verdict:<12} min ZMP margin "
             f"{self.analytic_min_margin * 1e3:7.2f} mm, max friction ratio "
             f"{self.max_friction_ratio:.3f} ({'>' if self.slip_predicted else '<='} mu)",
@@ -175,9 +184,18 @@ def run_trial(
     plan: Plan | None = None,
     recording: Recording | None = None,
 ) -> TrialResult:
-    """Plan (unless given), simulate (unless given) and compare one trial."""
+    """Plan (unless given), simulate (unless given) and compare one trial.
+
+    Open loop (``trial.controller`` None) the plan is one ``mujoco.rollout``; with a
+    controller, ``closed_loop.play_controller`` steps ``env.TrialEnv`` through the
+    whole trial; either way the same ``Recording`` goes through the same comparison.
+    """
     start = time.perf_counter()
     plan = plan or plan_walk(spec, trial.gait)
+    if recording is None and trial.controller is not None:
+        from bench.sim.closed_loop import play_controller
+
+        recording = play_controller(spec, trial, plan)
     recording = recording or play(
         plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
     )

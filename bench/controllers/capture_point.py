@@ -1,0 +1,51 @@
+"""LIPM capture-point correction of the pelvis, through the stance ankles.
+
+Linear inverted pendulum of height z (the CoM above the plane, slope frame S):
+ω = √(g_n / z) with g_n = g·cos(slope) ≈ the normal gravity, and the divergent
+component of motion (capture point)
+
+    ξ = c + ċ / ω            (measured: ``com``, ``com_vel``)
+    ξ_ref = c_ref + ċ_ref / ω   (the plan's ``com_ref``, ``com_vel_ref``).
+
+ξ drifts away from the CoP, ξ̇ = ω (ξ − p), so a capture point ahead of its
+reference is corrected by moving the pelvis (and so the CoM) back towards it:
+
+    δ = −K · (ξ − ξ_ref)      [m], the pelvis displacement asked for, in S.
+
+Each loaded foot's ankle rotates the leg over that foot: with h the ankle's
+height under the CoM, positive ankle pitch moves the pelvis by −h·Δq (−x),
+positive ankle roll by +h·Δq (+y), so
+
+    Δq_pitch = −δ_x / h,      Δq_roll = +δ_y / h,
+
+each clipped to ±``MAX_OFFSET``, added to the plan's command; the other joints
+follow the plan (``ctrl_ref``). A foot carrying less than ``MIN_LOAD`` is left alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+G = 9.81  # [m/s²]
+GAIN = 0.1  # K
+MIN_LOAD = 0.5  # [N]
+MAX_OFFSET = 0.2  # [rad]
+_PITCH, _ROLL = (2, 6), (3, 7)  # ankle pitch / roll of the left, right leg (MJCF order)
+
+
+def capture_point_pelvis(observation: dict) -> np.ndarray:
+    """Actuator command: the plan's, plus the capture-point pelvis correction (module doc)."""
+    action = observation["ctrl_ref"].copy()
+    com, com_ref = observation["com"], observation["com_ref"]
+    height = max(com[2], 0.05)
+    omega = np.sqrt(G / height)
+    xi = com[:2] + observation["com_vel"][:2] / omega
+    xi_ref = com_ref[:2] + observation["com_vel_ref"][:2] / omega
+    shift = -GAIN * (xi - xi_ref)  # δ [m]
+    for foot in (0, 1):
+        if observation["foot_force"][foot, 2] < MIN_LOAD:
+            continue
+        h = max(com[2] - observation["sole"][foot, 2], 0.05)
+        action[_PITCH[foot]] += np.clip(-shift[0] / h, -MAX_OFFSET, MAX_OFFSET)
+        action[_ROLL[foot]] += np.clip(shift[1] / h, -MAX_OFFSET, MAX_OFFSET)
+    return action
