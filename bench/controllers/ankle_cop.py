@@ -27,6 +27,8 @@ each clipped to ±``MAX_OFFSET``. All other joints follow the plan (``ctrl_ref``
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 GAIN = 0.5  # G: share of the CoP error corrected per period
@@ -40,21 +42,22 @@ _PITCH, _ROLL = (2, 6), (3, 7)  # ankle pitch / roll of the left, right leg (MJC
 def ankle_cop_feedback(observation: dict) -> np.ndarray:
     """Actuator command: the plan's, plus each loaded ankle's CoP correction (module doc)."""
     action = observation["ctrl_ref"].copy()
-    toe, heel, half_width = observation["foot_size"] - MARGIN
-    zmp, gain = observation["zmp_ref"], observation["ctrl_gain"]
+    toe, heel, half_width = (observation["foot_size"] - MARGIN).tolist()
+    zmp_x, zmp_y = observation["zmp_ref"].tolist()
+    gain = observation["ctrl_gain"]
+    forces, soles = observation["foot_force"], observation["sole"]
+    cops, normals = observation["foot_cop"], observation["foot_normal"]
     for foot in (0, 1):
-        load = observation["foot_force"][foot, 2]
+        load = float(forces[foot, 2])
         if load < MIN_LOAD:
             continue
-        sole = observation["sole"][foot]
-        target_x = np.clip(zmp[0], sole[0] - heel, sole[0] + toe)
-        target_y = np.clip(zmp[1], sole[1] - half_width, sole[1] + half_width)
-        error = observation["foot_cop"][foot] - (target_x, target_y)
+        sole_x, sole_y, _ = soles[foot].tolist()
+        error_x = cops[foot, 0] - min(max(zmp_x, sole_x - heel), sole_x + toe)
+        error_y = cops[foot, 1] - min(max(zmp_y, sole_y - half_width), sole_y + half_width)
+        nx, ny, nz = normals[foot].tolist()
         pitch, roll = _PITCH[foot], _ROLL[foot]
-        nx, ny, nz = observation["foot_normal"][foot]
-        tilt_pitch, tilt_roll = np.arctan2(nx, nz), np.arctan2(-ny, nz)
-        d_pitch = -GAIN * load * error[0] / gain[pitch] - FLATTEN * tilt_pitch
-        d_roll = GAIN * load * error[1] / gain[roll] - FLATTEN * tilt_roll
-        action[pitch] += np.clip(d_pitch, -MAX_OFFSET, MAX_OFFSET)
-        action[roll] += np.clip(d_roll, -MAX_OFFSET, MAX_OFFSET)
+        d_pitch = -GAIN * load * error_x / gain[pitch] - FLATTEN * math.atan2(nx, nz)
+        d_roll = GAIN * load * error_y / gain[roll] - FLATTEN * math.atan2(-ny, nz)
+        action[pitch] += min(max(d_pitch, -MAX_OFFSET), MAX_OFFSET)
+        action[roll] += min(max(d_roll, -MAX_OFFSET), MAX_OFFSET)
     return action

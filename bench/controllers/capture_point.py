@@ -24,6 +24,8 @@ follow the plan (``ctrl_ref``). A foot carrying less than ``MIN_LOAD`` is left a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 G = 9.81  # [m/s²]
@@ -36,16 +38,18 @@ _PITCH, _ROLL = (2, 6), (3, 7)  # ankle pitch / roll of the left, right leg (MJC
 def capture_point_pelvis(observation: dict) -> np.ndarray:
     """Actuator command: the plan's, plus the capture-point pelvis correction (module doc)."""
     action = observation["ctrl_ref"].copy()
-    com, com_ref = observation["com"], observation["com_ref"]
-    height = max(com[2], 0.05)
-    omega = np.sqrt(G / height)
-    xi = com[:2] + observation["com_vel"][:2] / omega
-    xi_ref = com_ref[:2] + observation["com_vel_ref"][:2] / omega
-    shift = -GAIN * (xi - xi_ref)  # δ [m]
+    cx, cy, cz = observation["com"].tolist()
+    vx, vy, _ = observation["com_vel"].tolist()
+    rx, ry, _ = observation["com_ref"].tolist()
+    wx, wy, _ = observation["com_vel_ref"].tolist()
+    omega = math.sqrt(G / max(cz, 0.05))
+    shift_x = -GAIN * ((cx + vx / omega) - (rx + wx / omega))  # δ [m]
+    shift_y = -GAIN * ((cy + vy / omega) - (ry + wy / omega))
+    forces, soles = observation["foot_force"], observation["sole"]
     for foot in (0, 1):
-        if observation["foot_force"][foot, 2] < MIN_LOAD:
+        if forces[foot, 2] < MIN_LOAD:
             continue
-        h = max(com[2] - observation["sole"][foot, 2], 0.05)
-        action[_PITCH[foot]] += np.clip(-shift[0] / h, -MAX_OFFSET, MAX_OFFSET)
-        action[_ROLL[foot]] += np.clip(shift[1] / h, -MAX_OFFSET, MAX_OFFSET)
+        h = max(cz - float(soles[foot, 2]), 0.05)
+        action[_PITCH[foot]] += min(max(-shift_x / h, -MAX_OFFSET), MAX_OFFSET)
+        action[_ROLL[foot]] += min(max(shift_y / h, -MAX_OFFSET), MAX_OFFSET)
     return action

@@ -283,7 +283,8 @@ class TrialEnv(dm_env.Environment):
         self._contacts = np.concatenate([block(f"{g}_contacts") for g in FOOT_GEOMS])
         self._net = np.concatenate([block(f"{g}_net") for g in FOOT_GEOMS])
         self._soles = np.concatenate([block(f"{p}sole_pos") for p in SIDE_PREFIX])
-        self._normals = np.concatenate([block(f"{p}foot_zaxis") for p in SIDE_PREFIX])
+        normals = np.concatenate([block(f"{p}foot_zaxis") for p in SIDE_PREFIX])
+        self._vectors = np.concatenate([self._net, self._soles, normals])
         self._touch = np.concatenate([block(f"{b}_touch") for b in NON_FOOT_BODIES])
         self._pelvis = block("pelvis_pos")
         self._fall_height = FALL_HEIGHT_FRACTION * self.plan.params.hip_height
@@ -294,42 +295,62 @@ class TrialEnv(dm_env.Environment):
         quat = np.empty(4)
         mujoco.mju_mat2Quat(quat, np.ascontiguousarray(self._R).reshape(-1))
         self._world_to_slope = np.array([quat[0], -quat[1], -quat[2], -quat[3]])
-        self._gain = self.model.actuator_gainprm[:, 0].copy()
         spec = self.spec
-        self._foot_size = np.array([spec.ankle_to_toe, spec.heel_offset, spec.foot_width / 2])
+        constants = {
+            "ctrl_gain": np.tile(self.model.actuator_gainprm[:, 0], (self._t.size, 1)),
+            "foot_size": np.tile(
+                [spec.ankle_to_toe, spec.heel_offset, spec.foot_width / 2], (self._t.size, 1)
+            ),
+        }
+        # every per-row value side by side, so an observation copies one row and slices it
+        columns = {**self._scalar_ref, **self._ref, "ctrl_ref": self._ctrl_ref, **constants}
+        blocks, self._row_views, start = [], [], 0
+        for name, values in columns.items():
+            values = np.asarray(values, float)
+            shape = values.shape[1:]
+            width = int(np.prod(shape))
+            blocks.append(values.reshape(values.shape[0], width))
+            view = start if not shape else slice(start, start + width)
+            self._row_views.append((name, view))
+            start += width
+        self._rows = np.hstack(blocks)
 
     def _observation(self) -> dict:
         data, R = self.data, self._R
         k = min(self._row, self._t.size - 1)
         sd = data.sensordata
         contacts = sd[self._contacts].reshape(2, MAX_CONTACTS, 7)
-        normal = np.where(contacts[..., 0] > 0, contacts[..., 1], 0.0)  # (2, k)
+        normal = contacts[..., 1] * (contacts[..., 0] > 0)  # (2, k) normal forces
         load = normal.sum(axis=1)  # (2,)
-        sole = sd[self._soles].reshape(2, 3) @ R  # (2, 3) in S
-        weighted = np.einsum("fk,fki->fi", normal, contacts[..., 4:7]) @ R  # (2, 3) in S
-        loaded = load > 0
+        # one rotation into S: contact-weighted points, nets, soles, normals, CoM, its velocity
+        vectors = np.empty((9, 3))
+        np.matmul(normal[:, None, :], contacts[..., 4:7], out=vectors[0:2, None, :])
+        vectors[2:8] = sd[self._vectors].reshape(6, 3)
+        vectors[8] = data.subtree_com[self._robot]
+        mujoco.mj_subtreeVel(self.model, data)  # subtree_linvel of the last forward pass
+        in_slope = np.vstack([vectors, data.subtree_linvel[self._robot]]) @ R
+        weighted, sole = in_slope[0:2], in_slope[4:6]
         foot_cop = sole[:, :2].copy()
-        foot_cop[loaded] = weighted[loaded, :2] / load[loaded, None]
-        total = load.sum()
-        cop = weighted[:, :2].sum(axis=0) / total if total > 0 else sole[:, :2].mean(axis=0)
+        if load[0] > 0:
+            foot_cop[0] = weighted[0, :2] / load[0]
+        if load[1] > 0:
+            foot_cop[1] = weighted[1, :2] / load[1]
+        total = load[0] + load[1]
+        cop = (weighted[0, :2] + weighted[1, :2]) / total if total > 0 else sole[:, :2].mean(0)
         pelvis_quat = np.empty(4)
         mujoco.mju_mulQuat(pelvis_quat, self._world_to_slope, data.qpos[3:7])
-        mujoco.mj_subtreeVel(self.model, data)  # subtree_linvel of the last forward pass
-        obs = {name: np.array(values[k]) for name, values in self._scalar_ref.items()}
-        obs.update({name: values[k].copy() for name, values in self._ref.items()})
+        row = self._rows[k].copy()  # the plan's references and the constants at this row
+        obs = {name: row[view] for name, view in self._row_views}
         obs.update(
             q=data.qpos[self._qpos],
             qd=data.qvel[self._qvel],
-            ctrl_ref=self._ctrl_ref[k].copy(),
-            foot_force=-sd[self._net].reshape(2, 3) @ R,
+            foot_force=-in_slope[2:4],
             foot_cop=foot_cop,
             cop=cop,
             sole=sole,
-            foot_normal=sd[self._normals].reshape(2, 3) @ R,
-            com=data.subtree_com[self._robot] @ R,
-            com_vel=data.subtree_linvel[self._robot] @ R,
-            ctrl_gain=self._gain.copy(),
-            foot_size=self._foot_size.copy(),
+            foot_normal=in_slope[6:8],
+            com=in_slope[8],
+            com_vel=in_slope[9],
             pelvis_quat=pelvis_quat,
             pelvis_angvel=data.qvel[3:6].copy(),
         )
