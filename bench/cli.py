@@ -294,14 +294,49 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _command(
         sub,
+        "controllers",
+        "open loop vs the shipped controllers over a sweep: which trials walk",
+        "Play every trial of a sweep file open loop and with each shipped closed-loop "
+        "controller (bench/controllers/), and write the markdown table of how many walk "
+        "(simulated verdict stable), which each controller gains and loses, and every verdict.",
+        "slopewalk controllers --workers 2 --out results/controllers.md",
+        "slopewalk controllers my_sweep.toml --out controllers.md",
+    )
+    p.add_argument(
+        "config",
+        nargs="?",
+        metavar="CONFIG",
+        help="sweep TOML (default: bench/experiments/sweeps/paper.toml)",
+    )
+    p.add_argument(
+        "--controller",
+        action="append",
+        metavar="MODULE:CALLABLE",
+        help="compare this controller (repeatable; default: the shipped ones)",
+    )
+    p.add_argument(
+        "--workers",
+        type=integer(WORKERS),
+        default=1,
+        metavar="N",
+        help=f"local worker processes, in {WORKERS}",
+    )
+    p.add_argument("--out", required=True, metavar="FILE", help="output markdown table")
+    p.set_defaults(run=commands.controllers)
+
+    p = _command(
+        sub,
         "benchmark",
         "print speed figures as name: value lines",
         "Measure how fast a part of the bench runs and print one 'name: value' line per "
         "figure (no thresholds: speed goals are read, never asserted).",
         "slopewalk benchmark planner",
         "slopewalk benchmark sim",
+        "slopewalk benchmark controller   # closed-loop vs rollout steps/s, same trial",
     )
-    p.add_argument("what", choices=("planner", "sim", "ga", "sweep"), help="what to measure")
+    p.add_argument(
+        "what", choices=("planner", "sim", "ga", "sweep", "controller"), help="what to measure"
+    )
     p.set_defaults(run=commands.benchmark)
     return parser
 

@@ -263,6 +263,30 @@ def sweep(args) -> None:
         print("wrote " + ", ".join(str(p.name) for p in written))
 
 
+def controllers(args) -> None:
+    from bench.controllers import SHIPPED, load_controller
+    from bench.experiments.controllers import compare_controllers, report
+    from bench.experiments.sweep_config import DEFAULT_SWEEP, load_sweep
+
+    check_output(args.out)
+    names = tuple(args.controller or SHIPPED)
+    for name in names:
+        load_controller(name)  # a bad name is refused before any trial runs
+    config = load_sweep(args.config)
+    table = compare_controllers(config, names, workers=args.workers)
+    source = args.config or DEFAULT_SWEEP.relative_to(DEFAULT_SWEEP.parents[3]).as_posix()
+    command = " ".join(
+        ["slopewalk controllers", *([args.config] if args.config else [])]
+        + [f"--controller {name}" for name in args.controller or ()]
+        + [f"--out {args.out}"]
+    )
+    text = report(table, source=source, command=command)
+    with atomic_paths(args.out) as (tmp,):
+        tmp.write_text(text)
+    print(text, end="")
+    print(f"wrote {args.out}")
+
+
 def benchmark(args) -> None:
     from bench.experiments import benchmark as benchmarks
 

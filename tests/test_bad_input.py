@@ -73,6 +73,7 @@ DEFAULT_OUT = {  # an --out is added where a row has none
     "optimize": "{out}/b.json",
     "compare": "{out}/c.md",
     "sweep": "{out}",
+    "controllers": "{out}/c.md",
 }
 CASES = [
     # numbers at the command line
@@ -127,6 +128,9 @@ CASES = [
         [*TRIAL, "--controller", "controller_faults:raises"],
         "raised ZeroDivisionError at t = 0.000 s: the user's bug",
     ),
+    (["controllers", "--controller", "no_such_module:f"], "no module named 'no_such_module'"),
+    (["controllers", "--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
+    (["controllers", "--out", "{out}"], "--out '{out}': is a directory"),
     (["mjcf", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
     (["mjcf", "--slope", "-60"], "--slope: -60: must lie in (-60, 60) deg"),
     (["mjcf", "--actuators", "hydraulic"], "invalid choice: 'hydraulic'"),

@@ -14,6 +14,9 @@ numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same firs
 calls in a fresh process once that cache is filled; ``cached_process_s``: that
 whole process, interpreter and imports included.
 
+``controller``: closed-loop steps/s (numpy controller through ``bench.sim.env``)
+vs the open-loop rollout's on the nominal trial (``controller_figures``).
+
 ``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s`` of
 the search, ``process_wall_s`` of a fresh ``python`` process doing it, start-up
 included, and ``driver_ms_per_gen``, the time per generation spent outside the
@@ -360,6 +363,42 @@ def grid_figures() -> dict:
     }
 
 
+def controller_figures() -> dict:
+    """Closed-loop vs open-loop simulation of the nominal trial (1 s steps, flat, 4 steps).
+
+    ``rollout_steps_per_s``: ``playback.play``, the open-loop default (model build,
+    one ``mujoco.rollout`` on the calling thread, sensor decoding).
+    ``closed_loop_steps_per_s``: ``closed_loop.play_controller`` with the numpy
+    controller ``ankle_cop_feedback`` (environment build, one ``mj_step``, observation
+    and controller call per period, the recording); ``open_loop_policy_steps_per_s``
+    the same with the plan as the policy (the environment's own cost). Best of 3
+    each; ``ratio`` = closed loop / rollout.
+    """
+    from bench.controllers import load_controller
+    from bench.sim.closed_loop import play_controller
+    from bench.sim.env import open_loop
+    from bench.sim.playback import play
+    from bench.sim.trial import TrialSpec
+
+    spec = load_spec()
+    name = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    trial = TrialSpec(GaitParams.nominal(spec, NOMINAL_STEP_TIME), controller=name)
+    plan = plan_walk(spec, trial.gait)
+    steps = play(plan).t.size
+    rollout_s = _best_of(lambda: play(plan), 3)
+    policy = load_controller(name)
+    closed_s = _best_of(lambda: play_controller(spec, trial, plan, controller=policy), 3)
+    plain_s = _best_of(lambda: play_controller(spec, trial, plan, controller=open_loop), 3)
+    return {
+        "trial_steps": steps,
+        "controller": name,
+        "rollout_steps_per_s": steps / rollout_s,
+        "closed_loop_steps_per_s": steps / closed_s,
+        "open_loop_policy_steps_per_s": steps / plain_s,
+        "ratio": rollout_s / closed_s,
+    }
+
+
 def run(what: str) -> dict:
     """Figures of one benchmark by name."""
     return {
@@ -367,4 +406,5 @@ def run(what: str) -> dict:
         "sim": sim_figures,
         "ga": ga_figures,
         "sweep": lambda: grid_figures() | sweep_figures(),
+        "controller": controller_figures,
     }[what]()

@@ -1,0 +1,90 @@
+"""Open loop vs closed-loop controllers over a sweep file's trials: which walk.
+
+``compare_controllers`` plays every trial of a sweep (default: the paper's) open
+loop (one ``mujoco.rollout``) and with each controller (``bench.sim.env``), on
+local worker processes, and ``report`` writes the markdown table of
+``results/controllers.md``: per controller, how many trials walk (simulated
+verdict ``stable``), which ones it gains and loses against open loop, and the
+verdict of every trial.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from concurrent.futures import ProcessPoolExecutor
+
+from bench.controllers import SHIPPED
+from bench.sim.trial import run_trial
+
+OPEN_LOOP = "open loop"
+
+
+def play(job) -> dict:
+    """Verdict, first event and ZMP RMS of one (sweep trial, controller or None)."""
+    trial, controller = job
+    result = run_trial(trial.spec, dataclasses.replace(trial.trial_spec(), controller=controller))
+    lost = [e for e in result.events if e.kind != "torque_limit"]
+    return {
+        "verdict": result.simulated_verdict,
+        "first": f"{lost[0].kind} {lost[0].time:.2f} s" if lost else "",
+        "zmp_rms_mm": result.zmp_rms * 1e3,
+        "steps_per_s": result.sim_steps / result.wall_s,
+    }
+
+
+def compare_controllers(config, controllers=SHIPPED, *, workers: int = 1) -> dict:
+    """{"trials": labels, OPEN_LOOP: [row per trial], controller: [...], ...}."""
+    trials = list(config.trials)
+    names = [None, *controllers]
+    jobs = [(trial, name) for name in names for trial in trials]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        rows = list(pool.map(play, jobs, chunksize=4))
+    out = {"trials": [t.label for t in trials]}
+    for k, name in enumerate(names):
+        out[name or OPEN_LOOP] = rows[k * len(trials) : (k + 1) * len(trials)]
+    return out
+
+
+def report(table: dict, *, source: str, command: str) -> str:
+    """The markdown comparison (module doc)."""
+    labels = table["trials"]
+    names = [k for k in table if k != "trials"]
+    base = [r["verdict"] == "stable" for r in table[OPEN_LOOP]]
+    lines = [
+        "# Open loop vs closed-loop controllers",
+        "",
+        f"Trials of `{source}` ({len(labels)}), each played open loop (the plan's joint "
+        "angles through one `mujoco.rollout`) and with each controller "
+        "(`bench/controllers/`, stepped through the `dm_env` environment `bench/sim/env.py`). "
+        "A trial *walks* when its simulated verdict is `stable` (no slip, tip or fall).",
+        "",
+        f"Regenerate with `{command}`.",
+        "",
+        "| policy | walks | gained vs open loop | lost vs open loop | mean steps/s |",
+        "|---|---|---|---|---|",
+    ]
+    for name in names:
+        rows = table[name]
+        walks = [r["verdict"] == "stable" for r in rows]
+        gained = [labels[i] for i, (w, b) in enumerate(zip(walks, base, strict=True)) if w > b]
+        lost = [labels[i] for i, (w, b) in enumerate(zip(walks, base, strict=True)) if w < b]
+        rate = sum(r["steps_per_s"] for r in rows) / len(rows)
+        lines.append(
+            f"| {name} | {sum(walks)} / {len(rows)} | {len(gained)}: {'; '.join(gained) or '-'} "
+            f"| {len(lost)}: {'; '.join(lost) or '-'} | {rate:.0f} |"
+        )
+    lines += ["", "| trial | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
+    for i, label in enumerate(labels):
+        cells = []
+        for name in names:
+            r = table[name][i]
+            first = f" ({r['first']})" if r["first"] else ""
+            cells.append(f"{r['verdict']}{first}")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Cells: simulated verdict (first slip/tip/fall and its time after the walk starts). "
+        "steps/s: MuJoCo steps per second of wall time of a whole trial (planning, "
+        "simulation, comparison), on worker processes sharing the machine.",
+    ]
+    return "\n".join(lines) + "\n"
