@@ -33,7 +33,7 @@ import numpy as np
 
 GAIN = 0.5  # G: share of the CoP error corrected per period
 MARGIN = 0.008  # [m] the target stays this far inside the sole
-FLATTEN = 0.5  # K: share of a loaded foot's tilt off the plane undone per period
+FLATTEN = 0.3  # K: share of a loaded foot's tilt off the plane undone per period
 MIN_LOAD = 0.5  # [N] a foot carrying less is left to the plan
 MAX_OFFSET = 0.3  # [rad]
 _PITCH, _ROLL = (2, 6), (3, 7)  # ankle pitch / roll of the left, right leg (MJCF order)

@@ -68,3 +68,12 @@ def test_trial_cli_runs_a_shipped_controller_with_every_output(tmp_path):
     assert data["trial"]["controller"] == name
     assert data["simulated_verdict"] == "stable"
     assert record.read_bytes()[:4] == b"RRF2" and np.load(series)["cop"].shape[1] == 2
+
+
+def test_each_shipped_controller_walks_where_open_loop_falls(spec):
+    """1 s steps up 20° at μ = 0.6: the plan alone slips and falls; both controllers walk."""
+    gait = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(20.0))
+    assert run_trial(spec, TrialSpec(gait, friction=0.6)).simulated_verdict == "fall"
+    for name in SHIPPED:
+        result = run_trial(spec, TrialSpec(gait, friction=0.6, controller=name))
+        assert result.simulated_verdict == "stable", (name, result.events)
