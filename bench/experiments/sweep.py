@@ -54,7 +54,7 @@ from bench.experiments.executor import (
 )
 from bench.experiments.progress import Progress
 from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.experiments.sweep_table import SweepTable, read_rows
+from bench.experiments.sweep_table import COLUMNS, CONTROLLER_COLUMNS, SweepTable, read_rows
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -262,8 +262,11 @@ def run_sweep(
     record_dir = out_dir / RECORDINGS_DIR if record else None
     workers = workers or os.cpu_count() or 1
     # a table that is not ours is refused here; one of the previous version may be replaced
-    finished = read_rows(final, previous_ok=resume is not True) if final.exists() else {}
-    with interruptible(), SweepTable.open(partial) as table:
+    columns = CONTROLLER_COLUMNS if config.closed_loop else COLUMNS
+    finished = (
+        read_rows(final, previous_ok=resume is not True, columns=columns) if final.exists() else {}
+    )
+    with interruptible(), SweepTable.open(partial, columns) as table:
         try:
             if not table.created and resume is False:
                 raise SweepError(

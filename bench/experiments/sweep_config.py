@@ -13,6 +13,7 @@ Format (degrees at this edge, like the CLI)::
     actuators = ["stiff"]                  # "stiff" or "servo" ("stiff")
     robot = ["short_legs.toml"]            # spec files, relative to this file (the paper's biped)
     mass_scale = [{}, {all = 10}, {legs = 2}]   # per link-group factors, > 0 ({} = none)
+    controller = ["none", "bench.controllers.ankle_cop:ankle_cop_feedback"]  # ("none": open loop)
 
     [[trial]]          # single trials beside (or instead of) the grid: same keys, scalars
     step_time = 0.4
@@ -32,7 +33,10 @@ alternating walk (each leg swings every other step), so it is written
 
 ``trial_id`` is a stable hash of everything that decides a trial's outcome: the
 gait inputs, μ, actuators, steps, seed, the simulation step and the *contents*
-of the (scaled) robot spec, not its path; editing a spec file gives new ids.
+of the (scaled) robot spec, not its path; editing a spec file gives new ids. A
+``controller`` enters the hash only when one is set, so open-loop ids are the same
+with or without the key; a sweep that names a controller anywhere gets a
+``controller`` column in its table (``sweep_table.CONTROLLER_COLUMNS``).
 """
 
 from __future__ import annotations
@@ -58,7 +62,7 @@ from planner.spec import LINK_NAMES, RobotSpec, load_spec
 SWEEPS_DIR = Path(__file__).parent / "sweeps"
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
 TOP_KEYS = ("description", "steps", "seed", "grid", "trial")
-TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale")
+TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
     "step_time": 1.0,
     "slope": 0.0,
@@ -66,7 +70,9 @@ DEFAULTS = {
     "actuators": "stiff",
     "robot": "default",
     "mass_scale": {},
+    "controller": "none",
 }
+OPEN_LOOP = "none"  # the controller key's value for the plan played open loop
 LEGS = tuple(name for name in LINK_NAMES if name != "pelvis")
 MASS_GROUPS = {"all": LINK_NAMES, "pelvis": ("pelvis",), "legs": LEGS} | {
     name: (name,) for name in LEGS
@@ -90,6 +96,11 @@ class SweepConfig:
     @cached_property
     def trials(self) -> TrialSet:
         return TrialSet(self.boxes, self.steps, self.seed)
+
+    @property
+    def closed_loop(self) -> bool:
+        """Some trial names a controller (its table has a ``controller`` column)."""
+        return any(value is not None for box in self.boxes for _, value in box.values[-1])
 
 
 def load_sweep(path: str | Path | None = None) -> SweepConfig:
@@ -166,12 +177,14 @@ def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
         for robot in axes["robot"]
         for scale in axes["mass_scale"]
     ]
+    controllers = [_controller(v, where) for v in axes["controller"]]
     values = (
         _unique((repr(v), v) for v in step_times),
         _unique((repr(v), v) for v in slopes),
         _unique((repr(v), v) for v in frictions),
         _unique((a, a) for a in axes["actuators"]),
         _unique((b.spec_json, b) for b in bodies),
+        _unique((c or OPEN_LOOP, c) for c in controllers),
     )
     box = Box(where, values)
     # The gait's own range checks (e.g. dt <= step_time/10) of each value of
@@ -231,6 +244,21 @@ def _body(robot, scale, robots, base_dir, where) -> Body:
                 factors[name] *= factor
         spec = spec.with_mass_scale(factors)
     return Body(robot, scale, spec, spec_text(spec))
+
+
+def _controller(value, where: str) -> str | None:
+    """None for "none" (open loop), else a ``MODULE:CALLABLE`` that imports and is callable."""
+    from bench.controllers import load_controller
+
+    if value == OPEN_LOOP:
+        return None
+    if not isinstance(value, str):
+        raise SweepError(f'{where}.controller = {value!r}: must be "none" or MODULE:CALLABLE')
+    try:
+        load_controller(value)  # in this process: a bad name is refused before any trial runs
+    except SlopewalkError as err:
+        raise SweepError(f"{where}.controller: {err}") from None
+    return value
 
 
 def _positive(value, key: str, unit: str, where: str) -> float:

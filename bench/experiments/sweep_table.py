@@ -97,15 +97,19 @@ DECIMALS = {  # outcome columns: digits after the point (module doc)
     "standing_fraction": 6,
 }
 HEADER = (",".join(COLUMNS) + "\n").encode()
+# A sweep that names a controller somewhere: one more input, last, so every other
+# column keeps its place ("none" for a trial played open loop).
+CONTROLLER_COLUMNS = (*COLUMNS, "controller")
+CONTROLLER_HEADER = (",".join(CONTROLLER_COLUMNS) + "\n").encode()
 PREVIOUS_COLUMNS = (*COLUMNS[:-1], "wall_s", "error")  # before fixed precision: a wall time
 PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
 _ID_CHARS = frozenset("0123456789abcdef")
 
 
-def format_row(row: dict) -> bytes:
-    """One complete CSV line (newline included) of ``row``'s ``COLUMNS``."""
+def format_row(row: dict, columns: tuple[str, ...] = COLUMNS) -> bytes:
+    """One complete CSV line (newline included) of ``row``'s ``columns``."""
     buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow(text(c, row.get(c)) for c in COLUMNS)
+    csv.writer(buffer, lineterminator="\n").writerow(text(c, row.get(c)) for c in columns)
     return buffer.getvalue().encode()
 
 
@@ -123,7 +127,12 @@ def text(column: str, value) -> str:
 
 
 def parse(
-    data: bytes, path: Path, *, torn_ok: bool = False, previous_ok: bool = False
+    data: bytes,
+    path: Path,
+    *,
+    torn_ok: bool = False,
+    previous_ok: bool = False,
+    columns: tuple[str, ...] = COLUMNS,
 ) -> tuple[dict[str, bytes], int]:
     """The rows of a table (by ``trial_id``, last one wins) and the length of its whole lines.
 
@@ -133,6 +142,7 @@ def parse(
         torn_ok: Accept a last line without its newline (left out of the rows).
         previous_ok: Accept a table of ``PREVIOUS_COLUMNS`` too (checked the
             same way), which a fresh run may replace; its rows are not returned.
+        columns: The table's columns, ``COLUMNS`` or ``CONTROLLER_COLUMNS``.
 
     Raises:
         SweepError: ``data`` is not a sweep table (module doc), naming what is wrong.
@@ -143,10 +153,16 @@ def parse(
         data.decode()
     except UnicodeDecodeError as err:
         raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
-    columns = COLUMNS
+    expected, header = columns, (",".join(columns) + "\n").encode()
+    other = CONTROLLER_HEADER if columns == COLUMNS else HEADER
     if previous_ok and data.startswith(PREVIOUS_HEADER):
         columns = PREVIOUS_COLUMNS
-    elif not data.startswith(HEADER):
+    elif data.startswith(other):
+        raise SweepError(
+            f"{where} for this sweep (its columns are those of a sweep "
+            f"{'with' if other == CONTROLLER_HEADER else 'without'} a controller key){hint}"
+        )
+    elif not data.startswith(header):
         first = data.split(b"\n", 1)[0]
         what = (
             "no header line"
@@ -154,7 +170,7 @@ def parse(
             else "written by an older slopewalk (it has a wall_s column): run without --resume "
             "to replace it"
             if data.startswith(PREVIOUS_HEADER)
-            else f"its header is not that of these {len(COLUMNS)} columns (another version?)"
+            else f"its header is not that of these {len(expected)} columns (another version?)"
             if first.startswith(b"trial_id,")
             else "its first line is not the header"
         )
@@ -182,10 +198,12 @@ def parse(
                     + ", ".join(allowed)
                 )
         rows[trial_id] = line + b"\n"
-    return (rows if columns is COLUMNS else {}), whole
+    return (rows if columns is expected else {}), whole
 
 
-def read_rows(path: str | Path, *, previous_ok: bool = False) -> dict[str, bytes]:
+def read_rows(
+    path: str | Path, *, previous_ok: bool = False, columns: tuple[str, ...] = COLUMNS
+) -> dict[str, bytes]:
     """The rows of a finished table (``parse``), by ``trial_id``."""
     path = Path(path)
     try:
@@ -194,7 +212,7 @@ def read_rows(path: str | Path, *, previous_ok: bool = False) -> dict[str, bytes
         raise SweepError(f"{path}: is a directory, not a sweep table") from None
     except OSError as err:
         raise SweepError(f"{path}: cannot read ({err.strerror})") from None
-    return parse(data, path, previous_ok=previous_ok)[0]
+    return parse(data, path, previous_ok=previous_ok, columns=columns)[0]
 
 
 def verdicts(line: bytes) -> tuple[str, str]:
@@ -214,12 +232,13 @@ class SweepTable:
         rows: trial_id -> the row's line (bytes, newline included).
     """
 
-    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool):
+    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool, columns=COLUMNS):
         self.path, self._fd, self.rows, self.created = path, fd, rows, created
+        self.columns = columns
 
     @classmethod
     @contextlib.contextmanager
-    def open(cls, path: str | Path):
+    def open(cls, path: str | Path, columns: tuple[str, ...] = COLUMNS):
         """Create (with its header) or reopen the table at ``path``, locked for this process.
 
         Raises:
@@ -231,20 +250,20 @@ class SweepTable:
         try:
             size = os.fstat(fd).st_size
             if size == 0:
-                os.write(fd, HEADER)
+                os.write(fd, (",".join(columns) + "\n").encode())
                 rows, created = {}, True
             else:
-                rows, whole = parse(os.pread(fd, size, 0), path, torn_ok=True)
+                rows, whole = parse(os.pread(fd, size, 0), path, torn_ok=True, columns=columns)
                 if whole < size:  # our own torn last line (module doc): its trial runs again
                     os.truncate(fd, whole)
                 created = False
-            yield cls(path, fd, rows, created)
+            yield cls(path, fd, rows, created, columns)
         finally:
             os.close(fd)
 
     def append(self, row: dict) -> None:
         """Append one finished trial's row: a single write of the whole line."""
-        self.append_line(format_row(row))
+        self.append_line(format_row(row, self.columns))
 
     def append_line(self, line: bytes) -> None:
         """Append one formatted line (``format_row``) whole."""
@@ -265,7 +284,7 @@ class SweepTable:
         lines = list(seen.values()) + [v for k, v in self.rows.items() if k not in seen]
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as f:
-                f.write(HEADER)
+                f.write((",".join(self.columns) + "\n").encode())
                 f.writelines(lines)
             os.chmod(tmp, 0o644)
 

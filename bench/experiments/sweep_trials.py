@@ -47,6 +47,7 @@ class SweepTrial:
         steps: Steps per walk.
         seed: The sweep's seed, recorded with the row.
         spec: The robot, mass scaling applied.
+        controller: ``MODULE:CALLABLE`` of a closed-loop controller, or None (open loop).
     """
 
     step_time: float
@@ -59,6 +60,7 @@ class SweepTrial:
     seed: int
     spec: RobotSpec = field(repr=False, compare=False)
     spec_json: str = field(default="", repr=False, compare=False)  # spec_text(spec), if known
+    controller: str | None = None
 
     @cached_property
     def trial_id(self) -> str:
@@ -78,6 +80,8 @@ class SweepTrial:
             "timestep": TIMESTEP,
             "spec": "\0",
         }
+        if self.controller is not None:  # only then: open-loop ids stay what they were
+            key["controller"] = self.controller
         text = json.dumps(key, sort_keys=True, default=float)
         text = text.replace('"\\u0000"', self.spec_json or spec_text(self.spec), 1)
         return hashlib.sha256(text.encode()).hexdigest()[:12]
@@ -97,6 +101,8 @@ class SweepTrial:
             text += f" mass {self.mass_scale_text}"
         if self.robot != "default":
             text += f" robot {self.robot}"
+        if self.controller is not None:
+            text += f" controller {self.controller.rpartition(':')[2]}"
         return text
 
     def gait(self) -> GaitParams:
@@ -107,7 +113,11 @@ class SweepTrial:
 
     def trial_spec(self) -> TrialSpec:
         return TrialSpec(
-            self.gait(), friction=self.friction, actuators=self.actuators, timestep=TIMESTEP
+            self.gait(),
+            friction=self.friction,
+            actuators=self.actuators,
+            timestep=TIMESTEP,
+            controller=self.controller,
         )
 
     def inputs(self) -> dict:
@@ -122,6 +132,7 @@ class SweepTrial:
             "mass_scale": self.mass_scale_text,
             "steps": self.steps,
             "seed": self.seed,
+            "controller": self.controller or "none",  # written only by closed-loop sweeps
         }
 
 
@@ -135,7 +146,7 @@ class Body:
     spec_json: str = field(repr=False)  # its part of the trial_id text
 
 
-AXES = ("step_time", "slope", "friction", "actuators", "body")
+AXES = ("step_time", "slope", "friction", "actuators", "body", "controller")
 
 
 @dataclass(frozen=True)
@@ -223,7 +234,7 @@ class TrialSet(Sequence):
 
     def make(self, values: list) -> SweepTrial:
         """The trial of one value per axis (``AXES`` order)."""
-        step_time, slope, friction, actuators, body = values
+        step_time, slope, friction, actuators, body, controller = values
         return SweepTrial(
             step_time,
             slope,
@@ -235,6 +246,7 @@ class TrialSet(Sequence):
             self._seed,
             body.spec,
             body.spec_json,
+            controller,
         )
 
     def simulated_steps(self) -> float:

@@ -14,8 +14,16 @@ import pytest
 
 from bench.cli import main
 from bench.experiments.sweep import SweepSummary, run_one, run_sweep
-from bench.experiments.sweep_config import SWEEPS_DIR, load_sweep, sweep_from_dict
-from bench.experiments.sweep_table import COLUMNS, HEADER, PREVIOUS_HEADER, format_row, parse
+from bench.experiments.sweep_config import SWEEPS_DIR, SweepError, load_sweep, sweep_from_dict
+from bench.experiments.sweep_table import (
+    COLUMNS,
+    CONTROLLER_COLUMNS,
+    CONTROLLER_HEADER,
+    HEADER,
+    PREVIOUS_HEADER,
+    format_row,
+    parse,
+)
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
 SWEEP = [sys.executable, "-m", "bench.cli", "sweep"]
@@ -417,3 +425,28 @@ def test_bad_input_has_no_traceback(tmp_path):
     assert result.returncode == 2
     assert result.stderr == f"slopewalk: error: {path}: grid.friction = -1: must be > 0\n"
     assert "Traceback" not in result.stderr and not (tmp_path / "out").exists()
+
+
+def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
+    """Open loop and the plan as a controller: same verdicts, told apart by the last column."""
+    policy = "bench.sim.env:open_loop"
+    config = sweep_from_dict(
+        {"steps": 1, "grid": {"step_time": [1.0, 0.4], "controller": ["none", policy]}},
+        base_dir=tmp_path,
+    )
+    summary = run_sweep(config, tmp_path, workers=1, quiet=True)
+    assert summary.errors == 0
+    data = (tmp_path / "sweep.csv").read_bytes()
+    assert data.startswith(CONTROLLER_HEADER)
+    rows = parse(data, tmp_path, columns=CONTROLLER_COLUMNS)[0]
+    by_input = {}
+    for line in rows.values():
+        fields = line.decode().rstrip("\n").split(",")
+        verdict = fields[COLUMNS.index("simulated_verdict")]
+        by_input.setdefault(fields[COLUMNS.index("step_time")], {})[fields[-1]] = verdict
+    assert by_input == {
+        "1.0": {"none": "stable", policy: "stable"},
+        "0.4": {"none": by_input["0.4"]["none"], policy: by_input["0.4"]["none"]},
+    }
+    with pytest.raises(SweepError, match="columns are those of a sweep with a controller key"):
+        parse(data, tmp_path)  # an open-loop sweep will not resume into it

@@ -135,6 +135,9 @@ def test_shipped_sweeps_parse():
         ({"grid": {}}, "s.toml: grid is empty: give at least one list, e.g. step_time = [1.0]"),
         ({"grid": [{"slope": [0]}, {}]}, "grid[1] is empty"),
         ({"grid": {"step_time": [0.005]}}, "step time 0.005 s: must lie in [0.01, 60] s"),
+        ({"grid": {"controller": ["ankle"]}}, "grid.controller: controller 'ankle': must read"),
+        ({"trial": [{"controller": "no_such:f"}]}, "no module named 'no_such'"),
+        ({"grid": {"controller": [None, 3]}}, "grid.controller = None: must be"),
     ],
 )
 def test_bad_sweep_files_are_refused_naming_the_key(data, message):
@@ -225,3 +228,29 @@ def test_a_million_trial_grid_is_counted_without_expanding_it(tmp_path):
     assert trials.simulated_steps() == pytest.approx(
         sum((1.0 + t / 100 * 4.4) / TIMESTEP for t in range(1, 101)) * 10**4
     )
+
+
+ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"
+
+
+def test_open_loop_ids_do_not_change_with_the_controller_key():
+    """The paper's ids are those of the committed table, with or without controller = "none"."""
+    committed = Path(__file__).parents[2] / "results" / "sweep.csv"
+    ids = [line.split(",", 1)[0] for line in committed.read_text().splitlines()[1:]]
+    paper = load_sweep()
+    assert [t.trial_id for t in paper.trials] == ids
+    assert not paper.closed_loop
+    flat = {"grid": {"step_time": [1.0, 0.5]}}
+    keyed = {"grid": {"step_time": [1.0, 0.5], "controller": ["none"]}}
+    assert [t.trial_id for t in _parse(flat).trials] == [t.trial_id for t in _parse(keyed).trials]
+
+
+def test_a_controller_axis_multiplies_the_trials_and_reaches_the_trial_spec():
+    config = _parse({"grid": {"step_time": [1.0, 0.5], "controller": ["none", ANKLE]}})
+    trials = list(config.trials)
+    assert config.closed_loop and len(trials) == 4
+    assert [t.controller for t in trials] == [None, ANKLE, None, ANKLE]
+    assert len({t.trial_id for t in trials}) == 4
+    assert trials[1].trial_spec().controller == ANKLE
+    assert trials[1].label.endswith("controller ankle_cop_feedback")
+    assert trials[1].inputs()["controller"] == ANKLE and trials[0].inputs()["controller"] == "none"
