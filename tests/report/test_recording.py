@@ -147,10 +147,21 @@ def test_events_and_verdicts_are_log_lines(spec, tmp_path):
     assert lines[0][:2] == (0.0, "INFO")
     assert f"simulated {result.simulated_verdict}" in lines[0][2]
     assert f"analytic {result.analytic_verdict}" in lines[0][2]
+    assert lines[0][2].endswith("; open loop")
     for event, (when, level, text) in zip(result.events, lines[1:], strict=True):
         assert when == pytest.approx(event.time, abs=1e-6)
         assert level == "WARN"
         assert text == f"{event.kind}: {event.cause}"
+
+
+def test_a_closed_loop_recording_names_its_controller(spec, tmp_path):
+    name = "bench.controllers.capture_point:capture_point_pelvis"
+    trial = TrialSpec(GaitParams.nominal(spec, 1.0, steps=1), controller=name)
+    plan = plan_walk(spec, trial.gait)
+    result = run_trial(spec, trial, plan=plan)
+    log = chunks(record_trial(tmp_path / "closed.rrd", plan, result))[("/events", False)]
+    (first, *_) = [text for (text,) in log["TextLog:text"]]
+    assert first.endswith(f"; controller {name}")
 
 
 def test_a_failure_mid_write_leaves_no_file(walk, tmp_path, monkeypatch):

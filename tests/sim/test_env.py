@@ -144,6 +144,12 @@ def test_a_bad_action_is_refused(action, fragment):
         env.step(action)
 
 
+def test_the_environment_alone_is_the_nominal_flat_trial(spec):
+    env = TrialEnv()
+    assert env.trial == TrialSpec(GaitParams.nominal(spec, 1.0))
+    assert env.action_spec().shape == (8,) and env.model.opt.timestep == 0.001
+
+
 def test_step_before_reset_starts_an_episode():
     env = _short_env()
     assert env.step(np.zeros(8)).step_type is dm_env.StepType.FIRST
