@@ -103,9 +103,10 @@ def build_parser() -> argparse.ArgumentParser:
         "trial",
         "plan a walk, play it in MuJoCo, compare the ZMPs",
         "Plan a walk, play its joint angles open loop through position actuators on the "
-        "tilted plane, and compare the analytic ZMP with the simulated contact CoP: both "
-        "verdicts, RMS and max distance, slip/tip/fall/torque-limit events. Writes the "
-        "scalars as JSON (null where a value does not exist; the summary says why).",
+        "tilted plane (or let --controller command them, closed loop), and compare the "
+        "analytic ZMP with the simulated contact CoP: both verdicts, RMS and max distance, "
+        "slip/tip/fall/torque-limit events. Writes the scalars as JSON (null where a value "
+        "does not exist; the summary says why).",
         "slopewalk trial --step-time 1 --slope 15 --out trial.json",
         "slopewalk trial --step-time 0.5 --friction 0.4 --actuators servo --out t.json \\\n"
         "      --series t.npz --record t.rrd",

@@ -17,7 +17,8 @@ period of one simulation step (``trial.timestep``), through the walk and the
 ``hold`` after it. The episode ends (``LAST``) when that time is up (discount 1),
 at a fall (``events.py``'s criterion; discount 0; only with ``end_at_fall``), or when
 MuJoCo warns (bad acceleration, a reset; discount 0), where ``mujoco.rollout``
-stops too. Reward: 1 per period the robot has not fallen.
+stops too. Reward: 1 per period, so with ``end_at_fall`` the return counts the
+periods the robot stayed up.
 
 Action: the ``nu`` actuator commands (position targets [rad], MJCF joint order
 ``joints.MJCF_JOINTS``), a ``BoundedArray`` of the actuators' ``ctrlrange``; a value

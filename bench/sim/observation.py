@@ -86,6 +86,7 @@ class Observer:
         quat = np.empty(4)
         mujoco.mju_mat2Quat(quat, np.ascontiguousarray(self._R).reshape(-1))
         self._world_to_slope = np.array([quat[0], -quat[1], -quat[2], -quat[3]])
+        self._t0, self._dt = t[0], model.opt.timestep  # t[k] = k dt - settle = t0 + k dt
         self._references(t)
         self._indices(t, ctrl_ref)
 
@@ -147,9 +148,9 @@ class Observer:
             start += width
         self._rows = np.hstack(blocks)
 
-    def __call__(self, row: int) -> dict:
-        """The observation of the data after ``row`` control rows (references at that row)."""
-        k = min(row, self._rows.shape[0] - 1)
+    def __call__(self, row_index: int) -> dict:
+        """The observation of the data after ``row_index`` control rows (module doc)."""
+        k = min(row_index, self._rows.shape[0] - 1)
         raw = self._sensordata[self._sensors]  # foot contacts, then nets, soles, normals
         contacts = raw[: self._ncontact].reshape(2, MAX_CONTACTS, 7)
         normal = contacts[..., 1] * (contacts[..., 0] > 0)  # (2, k) normal forces
@@ -174,6 +175,8 @@ class Observer:
         mujoco.mju_mulQuat(pelvis_quat, self._world_to_slope, self._pelvis_quat_in_world)
         row = self._rows[k].copy()  # the plan's references and the constants at this row
         obs = {name: row[view] for name, view in self._row_views}
+        if row_index > k:  # past the last row: the state's own time, references held
+            obs["time"] = np.float64(self._t0 + row_index * self._dt)
         obs["q"] = self._qpos[self._q]
         obs["qd"] = self._qvel[self._qd]
         obs["foot_force"] = -in_slope[2:4]

@@ -65,6 +65,7 @@ def test_the_open_loop_policy_reproduces_the_rollout_to_the_last_bit(spec, step_
     step, periods = _play_open_loop(env)
     got = env.recording()
     assert step.discount == 1.0  # played to the end, as the rollout does
+    assert step.observation["time"] == pytest.approx(expected.t[-1] + trial.timestep, abs=1e-12)
     assert periods == np.count_nonzero(expected.t >= 0)
     assert np.array_equal(got.t, expected.t)
     assert np.array_equal(got.q_ref, expected.q_ref)
