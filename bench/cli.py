@@ -126,8 +126,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--controller",
         metavar="MODULE:CALLABLE",
-        help="close the loop: call this function (observation dict -> actuator command, see "
-        "bench/sim/env.py) once per simulation step instead of playing the plan open loop, "
+        help="close the loop: call this function (observation dict, see bench/sim/observation.py, "
+        "-> actuator command) once per simulation step instead of playing the plan open loop, "
         "e.g. bench.controllers.ankle_cop:ankle_cop_feedback (default: open loop)",
     )
     p.set_defaults(run=commands.trial)
