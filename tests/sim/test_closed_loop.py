@@ -71,9 +71,9 @@ def test_trial_cli_runs_a_shipped_controller_with_every_output(tmp_path):
 
 
 def test_each_shipped_controller_walks_where_open_loop_falls(spec):
-    """1 s steps up 20° at μ = 0.6: the plan alone slips and falls; both controllers walk."""
+    """1 s steps up 20° at μ = 1: the plan alone tips and falls; both controllers walk."""
     gait = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(20.0))
-    assert run_trial(spec, TrialSpec(gait, friction=0.6)).simulated_verdict == "fall"
+    assert run_trial(spec, TrialSpec(gait, friction=1.0)).simulated_verdict == "fall"
     for name in SHIPPED:
-        result = run_trial(spec, TrialSpec(gait, friction=0.6, controller=name))
+        result = run_trial(spec, TrialSpec(gait, friction=1.0, controller=name))
         assert result.simulated_verdict == "stable", (name, result.events)
