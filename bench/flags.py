@@ -14,7 +14,8 @@ import math
 from planner import ranges
 from planner.ranges import Range
 
-ACTUATOR_MODES = ("stiff", "servo")  # bench.sim.model's (a test keeps them equal)
+# bench.sim.model's (a test keeps them equal)
+ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 
 
 class Parser(argparse.ArgumentParser):
@@ -155,5 +156,6 @@ def add_sim_flags(p: argparse.ArgumentParser) -> None:
         "--actuators",
         choices=ACTUATOR_MODES,
         default="stiff",
-        help="stiff: tracks the plan closely; servo: AX-12A-like gains and torque limit",
+        help="stiff: tracks the plan closely; servo: the spec's servo gains and limit; "
+        "_ff: the plan's torque fed forward",
     )

@@ -85,6 +85,10 @@ class RobotSpec:
         joint_limits: (lower, upper) [rad] by joint kind, MJCF sign convention.
         stall_torque: Servo torque limit [N m].
         no_load_speed: Servo speed limit [rad/s].
+        stiffness: Servo position gain kp [N m/rad].
+        velocity_gain: Servo velocity gain kv [N m s/rad] (on the joint speed).
+        armature: Reflected rotor inertia per joint [kg m²].
+        friction_loss: Dry joint friction per joint [N m].
     """
 
     name: str
@@ -99,6 +103,10 @@ class RobotSpec:
     joint_limits: dict[str, tuple[float, float]]
     stall_torque: float
     no_load_speed: float
+    stiffness: float
+    velocity_gain: float
+    armature: float
+    friction_loss: float
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -257,8 +265,7 @@ def _spec_from_dict(data: dict, source: str) -> RobotSpec:
         **{key: _number(geometry, key, "geometry") for key in GEOMETRY_KEYS},
         links=links,
         joint_limits=joint_limits,
-        stall_torque=_number(servo, "stall_torque", "servo"),
-        no_load_speed=_number(servo, "no_load_speed", "servo"),
+        **{key: _number(servo, key, "servo") for key in SERVO},
     )
 
 
@@ -317,6 +324,10 @@ JOINT_ANGLE = Range(-2 * np.pi, 2 * np.pi, "rad", low_open=False)
 SERVO = {
     "stall_torque": Range(0.0, 1e4, "N m"),
     "no_load_speed": Range(0.0, 1e3, "rad/s"),
+    "stiffness": Range(0.0, 1e6, "N m/rad"),
+    "velocity_gain": Range(0.0, 1e4, "N m s/rad", low_open=False),
+    "armature": Range(0.0, 1e3, "kg m^2", low_open=False),
+    "friction_loss": Range(0.0, 1e4, "N m", low_open=False),
 }
 MASS_SCALE = Range(0.0, 1e3)
 FINITE_INERTIA = Range(-math.inf, math.inf, "kg m^2")

@@ -315,7 +315,7 @@ def test_every_subcommand_describes_itself_with_an_example(capsys):
         assert f"slopewalk {name}" in parser.epilog, name
         assert "docs/robot-spec.md" in text and "docs/sweep-format.md" in text, name
     trial = commands["trial"].format_help()
-    assert "{stiff,servo}" in trial and "(default: stiff)" in trial
+    assert "{stiff,servo,stiff_ff,servo_ff}" in trial and "(default: stiff)" in trial
     assert "(default: 1.0)" in trial  # --friction
     assert "(default: 4)" in trial  # --steps
 

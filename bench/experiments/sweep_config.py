@@ -10,7 +10,7 @@ Format (degrees at this edge, like the CLI)::
     step_time = [1.0, 0.5]                 # [s], > 0 (1.0, the nominal step time)
     slope = [0, 10]                        # [deg], in (-60, 60) (0)
     friction = [0.6, 1.0]                  # Coulomb mu, > 0 (1.0)
-    actuators = ["stiff"]                  # "stiff" or "servo" ("stiff")
+    actuators = ["stiff"]                  # "stiff", "servo", "stiff_ff", "servo_ff" ("stiff")
     robot = ["short_legs.toml"]            # spec files, relative to this file (the paper's biped)
     mass_scale = [{}, {all = 10}, {legs = 2}]   # per link-group factors, > 0 ({} = none)
     controller = ["none", "bench.controllers.ankle_cop:ankle_cop_feedback"]  # ("none": open loop)

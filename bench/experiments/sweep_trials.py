@@ -41,7 +41,7 @@ class SweepTrial:
         step_time: Step completion time [s].
         slope_deg: Plane inclination [deg].
         friction: Coulomb μ of the feet on the plane.
-        actuators: "stiff" or "servo".
+        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
         robot: The spec path as written in the file, or "default".
         mass_scale: (group, factor) pairs in file order; () = no scaling.
         steps: Steps per walk.

@@ -37,7 +37,7 @@ from planner.ranges import FRICTION
 from planner.spec import JOINT_KINDS, RobotSpec, load_spec
 from planner.trajectory import MAX_SLOPE, GaitParams
 
-ACTUATOR_MODES = ("stiff", "servo")
+ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 _SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole
 _LEG_RADIUS = 0.015  # thigh/shank capsule radius [m] (AX-12A is 32 mm wide)
 
@@ -48,7 +48,14 @@ class SceneError(SlopewalkError):
 
 @dataclass(frozen=True)
 class Servo:
-    """Joint and position-actuator settings of one servo class (simulation settings)."""
+    """Joint and position-actuator settings of one actuator mode (simulation settings).
+
+    With ``feedforward`` the plan's torque is added to the position loop's output
+    (``playback.feedforward_torque``): the command becomes q_ref + τ_ff / kp, so the
+    one actuator's force is kp (q_ref − q) − kv q̇ + τ_ff, clipped as a whole by its
+    ``forcerange`` to ±``force_limit``. The actuator's ``ctrlrange`` is the joint
+    range widened by ``force_limit`` / kp, the largest shift a clipped τ_ff makes.
+    """
 
     kp: float  # position gain [N m/rad]
     kv: float  # velocity gain [N m s/rad]
@@ -56,23 +63,20 @@ class Servo:
     damping: float = 0.0  # joint damping [N m s/rad]
     armature: float = 0.0  # reflected rotor inertia [kg m²]
     frictionloss: float = 0.0  # dry joint friction [N m]
+    feedforward: bool = False  # add the plan's torque to the command
+
+    @property
+    def command_margin(self) -> float:
+        """How far the command may leave the joint range [rad]: force_limit / kp with τ_ff."""
+        return self.force_limit / self.kp if self.feedforward else 0.0
 
 
 # ---- Simulation settings: the one place they live (robot numbers live in the spec). ----
-# AX-12A servo (ROBOTIS e-manual): gear ratio 254:1, proportional-only firmware whose
-# default CW/CCW compliance slope is 32 steps of 0.29 deg; over that band the output
-# rises to full torque, so kp = stall torque / 0.162 rad = 9.3 N m/rad. kv = 0: the
-# firmware has no D term; the motor's speed-dependent torque is the joint damping below.
-AX12_COMPLIANCE_SLOPE = np.deg2rad(32 * 0.29)  # [rad]
-# Reflected rotor inertia and dry friction are not published for the AX-12A. Estimates
-# scaled from the MuJoCo Menagerie ROBOTIS OP3 (XM430-W350, 353.5:1, 4.1 N m stall:
-# identified armature 0.045 kg m², frictionloss 0.03 N m): armature by the gear ratio
-# squared, friction by the stall torque.
-AX12_ARMATURE = 0.045 * (254 / 353.5) ** 2  # 0.0232 kg m²
-AX12_FRICTIONLOSS_PER_STALL = 0.03 / 4.1  # [N m per N m of stall torque]
-# Servo joint damping = stall torque / no-load speed (spec's [servo] table): the slope of
-# a DC motor's torque-speed line (back-EMF), present with or without a command (for the
-# XM430 this rule gives 0.85 N m s/rad; the OP3's identified value is 1.08).
+# The servo's constants (kp, kv, armature, friction loss, torque limit) are the spec's
+# [servo] table; for the default spec the AX-12A's, with their sources in bioloid.toml.
+# Servo joint damping = stall torque / no-load speed: the slope of a DC motor's
+# torque-speed line (back-EMF), present with or without a command (for the XM430 this
+# rule gives 0.85 N m s/rad; the OP3's identified value is 1.08).
 #
 # stiff: a stiff, unsaturated position loop that tracks the plan closely, for validating
 # the analytic model. It keeps the servo's armature: with a 1 ms step and no rotor
@@ -80,7 +84,7 @@ AX12_FRICTIONLOSS_PER_STALL = 0.03 / 4.1  # [N m per N m of stall torque]
 # Armature only adds A q̈ to each hinge's own equation, so for a tracked motion it changes
 # actuator torques, not the ground reaction the ZMP comes from. The loop lags the
 # command by about kv / kp = 10 ms (kv acts on the absolute joint speed).
-STIFF = Servo(kp=200.0, kv=2.0, force_limit=50.0, armature=AX12_ARMATURE)
+STIFF_KP, STIFF_KV, STIFF_FORCE_LIMIT = 200.0, 2.0, 50.0
 # Options: implicitfast integrates kv and joint damping implicitly; 1 ms resolves the stiff loop.
 TIMESTEP = 0.001  # [s], default of scene_xml
 INTEGRATOR = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -88,18 +92,30 @@ IMPRATIO = 10.0
 
 
 def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
-    """Joint and actuator settings of ``actuators`` mode ("stiff" or "servo") for ``spec``."""
+    """Joint and actuator settings of ``actuators`` mode for ``spec``.
+
+    "stiff" / "stiff_ff": kp 200, kv 2, 50 N m, the spec's armature; "servo" / "servo_ff":
+    every constant from the spec's [servo] table. "_ff" adds the torque feedforward.
+    """
     if actuators not in ACTUATOR_MODES:
         raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
-    if actuators == "stiff":
-        return STIFF
+    feedforward = actuators.endswith("_ff")
+    if actuators.startswith("stiff"):
+        return Servo(
+            kp=STIFF_KP,
+            kv=STIFF_KV,
+            force_limit=STIFF_FORCE_LIMIT,
+            armature=spec.armature,
+            feedforward=feedforward,
+        )
     return Servo(
-        kp=spec.stall_torque / AX12_COMPLIANCE_SLOPE,
-        kv=0.0,
+        kp=spec.stiffness,
+        kv=spec.velocity_gain,
         force_limit=spec.stall_torque,
         damping=spec.stall_torque / spec.no_load_speed,
-        armature=AX12_ARMATURE,
-        frictionloss=AX12_FRICTIONLOSS_PER_STALL * spec.stall_torque,
+        armature=spec.armature,
+        frictionloss=spec.friction_loss,
+        feedforward=feedforward,
     )
 
 
@@ -156,7 +172,7 @@ def scene_xml(
         slope: Plane inclination θs [rad] in (−60°, 60°); the plane turns about world y
             by −θs, so slope-frame x goes uphill. Gravity stays (0, 0, −9.81).
         friction: Coulomb friction coefficient μ of the foot-plane contact, > 0.
-        actuators: "stiff" or "servo" (``servo_settings``).
+        actuators: "stiff", "servo", "stiff_ff" or "servo_ff" (``servo_settings``).
         timestep: Simulation step [s], > 0.
 
     Raises:
@@ -314,7 +330,10 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
     ax12.actuator.forcerange = [-servo.force_limit, servo.force_limit]
     for kind in JOINT_KINDS:
         cls = mjs.add_default(kind, ax12)
-        cls.joint.range = cls.actuator.ctrlrange = list(spec.joint_limits[kind])
+        lower, upper = spec.joint_limits[kind]
+        cls.joint.range = [lower, upper]
+        widen = servo.command_margin
+        cls.actuator.ctrlrange = [lower - widen, upper + widen]
 
     height, home = home_pose(spec)
     pelvis = mjs.worldbody.add_body(name="pelvis", pos=[0, 0, height], childclass="bioloid")

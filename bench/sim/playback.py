@@ -26,7 +26,8 @@ import numpy as np
 from mujoco import rollout
 
 from bench.sim.contact import TrialSensors, add_trial_sensors, decode
-from bench.sim.model import SceneError, mujoco_message, scene_xml, servo_settings
+from bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
+from planner.joints import stance_swing_to_left_right
 from planner.kinematics import Chain, rotation_slope_to_world
 from planner.plan import Plan
 
@@ -41,7 +42,8 @@ class Recording:
 
     Attributes:
         t: Time of each row [s], (m,).
-        q_ref: Commanded joint angles, MJCF order [rad], (m, 8).
+        q_ref: Actuator commands, MJCF order [rad], (m, 8): the planned angles, plus
+            τ_ff / kp in a feedforward mode (``control_sequence``).
         sensors: Decoded sensor series (``contact.TrialSensors``), in S.
         force_limit: Actuator torque limit [N m].
         diverged_at: Time the simulation blew up [s], or None.
@@ -81,19 +83,45 @@ def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:
     data.qpos[:3] = R_ws @ pelvis_in_slope
     mujoco.mju_mat2Quat(data.qpos[3:7], (R_ws @ pelvis_rotation).reshape(-1))
     data.qpos[7:15] = plan.q_left_right[0]
-    data.ctrl[:] = plan.q_left_right[0]
+    data.ctrl[:] = plan.q_left_right[0]  # the first row of the control sequence replaces it
     mujoco.mj_forward(model, data)
     state = np.empty(mujoco.mj_stateSize(model, _STATE))
     mujoco.mj_getState(model, data, state, _STATE)
     return state
 
 
-def control_sequence(plan: Plan, timestep: float, settle: float, hold: float):
-    """Row times [s] (walk starts at 0) and commanded angles, MJCF order, (m, 8)."""
+def control_sequence(
+    plan: Plan, timestep: float, settle: float, hold: float, servo: Servo | None = None
+):
+    """Row times [s] (walk starts at 0) and commands, MJCF order, (m, 8).
+
+    The command is the planned angle [rad], linearly interpolated to the rows; with a
+    feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``, held at its
+    first and last value while settling and holding), which adds τ_ff to the actuator's
+    force (``model.Servo``).
+    """
     m = int(round((settle + plan.t[-1] + hold) / timestep))
     t = np.arange(m) * timestep - settle
     q_ref = np.column_stack([np.interp(t, plan.t, plan.q_left_right[:, j]) for j in range(8)])
+    if servo is not None and servo.feedforward:
+        tau = feedforward_torque(plan, servo)
+        q_ref += np.column_stack([np.interp(t, plan.t, tau[:, j]) for j in range(8)]) / servo.kp
     return t, q_ref
+
+
+def feedforward_torque(plan: Plan, servo: Servo) -> np.ndarray:
+    """Torque the position loop is fed forward, MJCF order [N m], (n, 8) on ``plan.t``.
+
+    τ_ff = τ (Newton-Euler) + A q̈ (rotor inertia) + (d + kv) q̇: the torque the joint
+    needs to follow the plan, plus what the servo's own joint damping d and velocity
+    gain kv (which acts on the joint speed, not its error) take away at the planned
+    speed; clipped to ±``servo.force_limit``. Dry friction is left out (its sign
+    flips with the speed). The actuator's forcerange clips the loop's total again.
+    """
+    qd, qdd = (stance_swing_to_left_right(x, plan.stance) for x in (plan.qd, plan.qdd))
+    tau = stance_swing_to_left_right(plan.tau, plan.stance)
+    total = tau + servo.armature * qdd + (servo.damping + servo.kv) * qd
+    return np.clip(total, -servo.force_limit, servo.force_limit)
 
 
 def play(
@@ -110,7 +138,7 @@ def play(
     Args:
         plan: The analytic walk to play.
         friction: Coulomb μ of the feet on the plane, > 0.
-        actuators: "stiff" or "servo".
+        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
         timestep: Simulation step [s].
         settle, hold: Hold times before and after the walk [s].
     """
@@ -149,15 +177,16 @@ def play_many(
     for (_, _, mu, mode, _), members in groups.items():
         first = plans[members[0]]
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
+        servo = servo_settings(first.spec, mode)
         controls, states, times = [], [], None
         for i in members:
-            times, q_ref = control_sequence(plans[i], timestep, settle, hold)
+            times, q_ref = control_sequence(plans[i], timestep, settle, hold, servo)
             controls.append(q_ref)
             states.append(initial_state(model, plans[i]))
         datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(members))))]
         state, sensordata = rollout.rollout(model, datas, np.array(states), np.array(controls))
         R_ws = rotation_slope_to_world(first.params.slope)
-        limit = servo_settings(first.spec, mode).force_limit
+        limit = servo.force_limit
         for row, i in enumerate(members):
             out[i] = recording_from_rollout(
                 model, state[row], sensordata[row], times, controls[row], R_ws, limit

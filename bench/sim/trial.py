@@ -47,7 +47,7 @@ class TrialSpec:
     Attributes:
         gait: Step time, slope [rad], Hz, lift, tilt, steps.
         friction: Coulomb μ of the feet on the plane, > 0.
-        actuators: "stiff" or "servo".
+        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
         timestep: Simulation step [s].
         controller: ``MODULE:CALLABLE`` of a closed-loop controller (observation -> action,
             ``bench.sim.env``), or None: the plan played open loop by ``mujoco.rollout``.

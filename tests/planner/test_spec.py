@@ -3,6 +3,7 @@
 import re
 import tomllib
 
+import numpy as np
 import pytest
 
 from planner.errors import SpecError
@@ -30,6 +31,12 @@ def test_default_spec_is_the_papers_biped(spec):
         (lambda d: d["links"]["thigh"].update(inertia=[1e-5, 1e-5, 1e-3]), "triangle"),
         (lambda d: d.pop("servo"), "missing table [servo]"),
         (lambda d: d["joint_limits"].update(knee=[1.0, 0.0]), "joint_limits.knee"),
+        (lambda d: d["servo"].pop("stiffness"), "missing key servo.stiffness"),
+        (lambda d: d["servo"].update(stiffness=0.0), "servo.stiffness 0.0 N m/rad: must lie in"),
+        (lambda d: d["servo"].update(velocity_gain=-1.0), "servo.velocity_gain -1.0 N m s/rad"),
+        (lambda d: d["servo"].update(armature=float("nan")), "servo.armature nan kg m^2"),
+        (lambda d: d["servo"].update(friction_loss=True), "servo.friction_loss True"),
+        (lambda d: d["servo"].update(stifness=9.0), "did you mean servo.stiffness?"),
     ],
 )
 def test_malformed_spec_is_refused(edit, message):
@@ -54,3 +61,9 @@ def test_mass_scale_groups(spec):
     assert mixed.links["foot"].mass == spec.links["foot"].mass
     with pytest.raises(SpecError, match="mass scale group 'arms'"):
         spec.with_mass_scale({"arms": 2})
+
+
+def test_servo_constants_are_the_ax12a(spec):
+    """kp = stall torque over the 32-step compliance slope of 0.29 deg; no D term."""
+    assert spec.stiffness == pytest.approx(spec.stall_torque / np.deg2rad(32 * 0.29), rel=1e-3)
+    assert (spec.velocity_gain, spec.armature, spec.friction_loss) == (0.0, 0.0232, 0.011)
