@@ -33,9 +33,10 @@ import numpy as np
 from bench.sim.playback import Recording
 from planner.joints import MJCF_JOINTS
 
-SLIP_DISTANCE = 0.005  # [m]
-LOADED_FRACTION = 0.10  # of the robot's weight
-TIP_ANGLE = np.deg2rad(5.0)  # [rad]
+# SLIP_DISTANCE, LOADED_FRACTION, TIP_ANGLE: one definition with the analytic prediction's
+# (planner/verdict.py), their basis stated above.
+from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
+
 FALL_HEIGHT_FRACTION = 0.6  # of the planned hip height
 SATURATION = 0.99  # of the actuator's torque limit
 VERDICTS = ("stable", "slip", "tip", "fall", "diverged")

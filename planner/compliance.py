@@ -1,0 +1,157 @@
+"""Compliance-aware prediction: the walk a position servo of finite stiffness actually makes.
+
+A position loop of stiffness kp reaches the commanded angle only where it needs
+no torque. Each joint's equation with the loop's torque
+kp (q_ref − q) − kv q̇ + τ_ff, its own damping d and rotor inertia A reads
+
+    kp (q_ref − q) = τ(q, q̇, q̈) + A q̈ + (d + kv) q̇ − τ_ff
+
+with τ the Newton–Euler torque of the walk actually made. Solved for q this is a
+fixed point, q = q_ref − (τ(q) + A q̈ + (d + kv) q̇ − τ_ff) / kp, iterated from
+q = q_ref until the largest change is below ``TOLERANCE``. Without feedforward
+(τ_ff = 0) the servo sags by τ/kp; with it only what the clipped τ_ff does not
+cover is left.
+
+Quasi-static: the deflection changes the pose, the rates stay the plan's (q̇, q̈
+of q_ref). Differentiating the deflection instead makes the map unstable: its
+second difference at a 1 ms step multiplies the link inertia by 10⁶ s⁻², far
+above any kp, and a torque step at a phase change would turn into an
+acceleration spike the servo's own mass-spring dynamics smooth out in reality.
+The map converges when kp exceeds the gravity stiffness of the chain (for the
+default robot about m g h ≈ 1.3 N m/rad at the stance ankle, against kp 9.26).
+
+Stated modelling choices: the stance sole stays where planned (the chain is rooted
+there), the planned support polygon holds (the feet are on the ground where the
+plan put them), and the double-support load split keeps the plan's shares. The
+pass re-runs the analytic pipeline (Newton–Euler, multibody ZMP, margin, friction
+ratio) on the deflected angles and returns it as a ``Plan``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from planner.errors import SlopewalkError
+from planner.kinematics import Chain, gravity_in_slope
+from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
+from planner.plan import Plan
+from planner.zmp import friction_ratio, signed_margin, zmp_lipm, zmp_multibody
+
+TOLERANCE = 1e-7  # [rad], largest change of q between iterations at convergence
+MAX_ITERATIONS = 60
+
+
+@dataclass(frozen=True)
+class CompliantWalk:
+    """The compliance-aware prediction of one walk.
+
+    Attributes:
+        plan: The analytic series re-run on the reached angles (a ``Plan``; its ``q``
+            is the reached q, ``tau`` the torque that walk needs).
+        deflection: q_ref − q [rad], Table-I order, (n, 8).
+        iterations: Fixed-point iterations made.
+        converged: Whether the change fell below ``TOLERANCE``; False means no pose
+            where the servo holds the torques it needs (the loop is too soft).
+        loop_torque: kp (q_ref − q) − kv q̇ + τ_ff [N m], (n, 8): what the servo must
+            deliver; beyond its limit it saturates.
+    """
+
+    plan: Plan
+    deflection: np.ndarray
+    iterations: int
+    converged: bool
+    loop_torque: np.ndarray
+
+
+def compliant_walk(
+    plan: Plan,
+    *,
+    stiffness: float,
+    velocity_gain: float = 0.0,
+    damping: float = 0.0,
+    armature: float = 0.0,
+    feedforward: np.ndarray | None = None,
+) -> CompliantWalk:
+    """The walk a servo of stiffness kp reaches when commanded ``plan.q`` (see module doc).
+
+    Args:
+        plan: The planned walk (its ``q`` is the command).
+        stiffness: kp [N m/rad], > 0.
+        velocity_gain: kv [N m s/rad] (on the joint speed).
+        damping: Joint damping d [N m s/rad].
+        armature: Rotor inertia A [kg m²].
+        feedforward: τ_ff fed into the loop [N m], Table-I order, (n, 8); None for none.
+    """
+    if not stiffness > 0:
+        raise SlopewalkError(f"stiffness {stiffness!r} N m/rad: must be > 0")
+    tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward)
+    dynamics = _Dynamics(plan)
+    delta = np.zeros_like(plan.q)
+    qd, qdd = plan.qd, plan.qdd
+    rate_terms = armature * qdd + (damping + velocity_gain) * qd - tau_ff
+    change, iterations = np.inf, 0
+    while iterations < MAX_ITERATIONS and not change < TOLERANCE:
+        tau = dynamics.torque(plan.q + delta, qd, qdd)
+        new = -(tau + rate_terms) / stiffness
+        change = float(np.abs(new - delta).max()) if new.size else 0.0
+        delta, iterations = new, iterations + 1
+        if not np.isfinite(change):
+            break
+    converged = bool(change < TOLERANCE)
+    walk = dynamics.plan_of(plan.q + delta, qd, qdd)
+    loop = -stiffness * delta - velocity_gain * qd + tau_ff
+    return CompliantWalk(walk, -delta, iterations, converged, loop)
+
+
+class _Dynamics:
+    """The analytic pipeline of ``plan`` for other joint angles; stance sole and split fixed."""
+
+    def __init__(self, plan: Plan):
+        self.base = plan
+        self.chain = Chain.from_spec(plan.spec)
+        self.gravity = gravity_in_slope(plan.params.slope)
+        ground_z = plan.ground_force[:, 2]
+        # the plan's DSP share of the total wrench on the other foot (swing_force = share · total)
+        self.share = np.where(ground_z != 0, plan.swing_force[:, 2] / ground_z, 0.0)[:, None]
+
+    def _solve(self, q, qd, qdd):
+        p = self.base
+        R, o = self.chain.poses(q, p.stance_sole, p.stance)
+        dyn = inverse_dynamics_poses(self.chain, R, o, qd, qdd, p.stance, self.gravity)
+        swing_sole = o[9].T
+        swing_force = self.share * dyn.stance_force
+        swing_moment = self.share * (
+            dyn.stance_moment + cross(p.stance_sole - swing_sole, dyn.stance_force)
+        )
+        tau = dyn.tau + swing_wrench_torques(self.chain, R, o, swing_force, swing_moment)
+        return dyn, tau, swing_force, swing_sole
+
+    def torque(self, q, qd, qdd):
+        return self._solve(q, qd, qdd)[1]
+
+    def plan_of(self, q, qd, qdd) -> Plan:
+        dyn, tau, swing_force, swing_sole = self._solve(q, qd, qdd)
+        mass = self.chain.mass
+        zmp = zmp_multibody(mass, dyn.com, dyn.com_acc, dyn.momentum_rate, self.gravity)
+        com = np.einsum("k,nki->ni", mass, dyn.com) / mass.sum()
+        com_acc = np.einsum("k,nki->ni", mass, dyn.com_acc) / mass.sum()
+        ground = dyn.stance_force
+        return replace(
+            self.base,
+            q=q,
+            qd=qd,
+            qdd=qdd,
+            tau=tau,
+            zmp=zmp,
+            zmp_lipm=zmp_lipm(com, com_acc, self.gravity),
+            com=com,
+            com_acc=com_acc,
+            swing_sole=swing_sole,
+            margin=signed_margin(zmp, self.base.polygon),
+            ground_force=ground,
+            stance_force=ground - swing_force,
+            swing_force=swing_force,
+            friction_ratio=friction_ratio(ground),
+        )

@@ -1,0 +1,229 @@
+"""Predicted events of a planned walk and the analytic verdict they imply.
+
+Beside the paper's binary test (ZMP inside the support polygon at every sample,
+``Plan.stable``), each way the simulator can find a walk failing is predicted from
+the analytic series, with the simulator's own thresholds (defined here, used by
+``bench/sim/events.py``, so both sides judge by one number):
+
+* ``joint_limit``: a planned joint angle outside the spec's limits (the MJCF's
+  joint range stops it there, so the walk played is not the walk planned).
+* ``tip``: the support's rotation about its edge (``tipping.foot_rotation``)
+  passes ``TIP_ANGLE``.
+* ``strike``: the swing sole of the walk actually made (compliance-aware) would
+  go into the plane in single support; the plane props the robot up and turns
+  the stance foot about its far edge (``strike.strike_roll``) past ``TIP_ANGLE``.
+* ``slip``: where the required friction |F_t|/F_n exceeds μ the ground holds only
+  μ F_n; the rest, |F_t| − μ F_n, slides the robot (mass m) along the plane. The
+  slide is integrated like the tip rotation and ``slip`` predicted past
+  ``SLIP_DISTANCE``, the simulator's slip threshold.
+* ``foot_slide``: the plan itself moves a loaded foot along the plane (the rear
+  foot in double support drifts sideways by hip width × (1/cos λ − 1) as the lean
+  changes, with no hip roll to absorb it) by more than ``SLIP_DISTANCE``.
+
+Verdict: the most severe predicted event, in the order joint_limit, tip, strike,
+slip, foot_slide; ``stable`` when none.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.joints import JOINT_KINDS, JOINT_NAMES
+from planner.strike import strike_roll
+from planner.tipping import excursion_integral, foot_rotation
+
+# ---- Thresholds shared with the simulator (bench/sim/events.py states their basis). ----
+SLIP_DISTANCE = 0.005  # [m]
+LOADED_FRACTION = 0.10  # of the robot's weight
+TIP_ANGLE = np.deg2rad(5.0)  # [rad]
+G = 9.81  # [m/s²]
+
+PREDICTED_KINDS = ("joint_limit", "tip", "strike", "slip", "foot_slide")
+SEVERITY = {kind: len(PREDICTED_KINDS) - i for i, kind in enumerate(PREDICTED_KINDS)}
+
+
+@dataclass(frozen=True)
+class PredictedEvent:
+    """Something the analytic model says will happen.
+
+    Attributes:
+        time: When [s], walk start = 0.
+        kind: One of ``PREDICTED_KINDS``.
+        cause: One line saying what and how much.
+    """
+
+    time: float
+    kind: str
+    cause: str
+
+
+def verdict(events: list[PredictedEvent]) -> str:
+    """The most severe predicted event kind, or ``stable``."""
+    worst = max(events, key=lambda e: SEVERITY[e.kind], default=None)
+    return "stable" if worst is None else worst.kind
+
+
+def joint_limit_events(plan) -> list[PredictedEvent]:
+    """First sample where each joint of ``plan`` leaves the spec's limits."""
+    events = []
+    for j, (name, kind) in enumerate(zip(JOINT_NAMES, JOINT_KINDS, strict=True)):
+        lower, upper = plan.spec.joint_limits[kind]
+        q = plan.q[:, j]
+        out = np.flatnonzero((q < lower) | (q > upper))
+        if out.size:
+            k = out[0]
+            worst = q[np.argmax(np.maximum(lower - q, q - upper))]
+            events.append(
+                PredictedEvent(
+                    float(plan.t[k]),
+                    "joint_limit",
+                    f"{name} leaves its limits [{lower:g}, {upper:g}] rad ({kind}), "
+                    f"up to {worst:.3f} rad",
+                )
+            )
+    return events
+
+
+def tip_events(plan, margin=None, zmp=None) -> tuple[list[PredictedEvent], np.ndarray]:
+    """``tip`` where the rotation about the support edge passes TIP_ANGLE; and the rotation."""
+    theta = foot_rotation(plan, margin, zmp)
+    over = np.flatnonzero(theta > TIP_ANGLE)
+    if not over.size:
+        return [], theta
+    k = over[0]
+    return [
+        PredictedEvent(
+            float(plan.t[k]),
+            "tip",
+            f"support turns {np.rad2deg(theta.max()):.1f} deg about its edge "
+            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg) while the ZMP is outside",
+        )
+    ], theta
+
+
+def slip_events(plan, friction: float) -> tuple[list[PredictedEvent], np.ndarray]:
+    """``slip`` where the friction the walk needs beyond μ slides it past SLIP_DISTANCE."""
+    force = plan.ground_force
+    tangential = np.hypot(force[:, 0], force[:, 1])
+    normal = np.maximum(force[:, 2], 0.0)
+    excess = tangential - friction * normal
+    slide = excursion_integral(plan.t, excess, plan.spec.total_mass)
+    over = np.flatnonzero(slide > SLIP_DISTANCE)
+    if not over.size:
+        return [], slide
+    k = over[0]
+    return [
+        PredictedEvent(
+            float(plan.t[k]),
+            "slip",
+            f"friction ratio {np.nanmax(plan.friction_ratio):.3f} > mu {friction:g} slides "
+            f"the feet {slide.max() * 1e3:.1f} mm (threshold {SLIP_DISTANCE * 1e3:g} mm)",
+        )
+    ], slide
+
+
+def foot_slide_events(plan) -> list[PredictedEvent]:
+    """``foot_slide`` where the plan moves its loaded second foot in DSP past SLIP_DISTANCE."""
+    worst, when = 0.0, None
+    for start, moved in _loaded_runs(plan):
+        over = np.flatnonzero(moved > SLIP_DISTANCE)
+        if over.size and moved.max() > worst:
+            worst, when = float(moved.max()), float(plan.t[start + over[0]])
+    if when is None:
+        return []
+    return [
+        PredictedEvent(
+            when,
+            "foot_slide",
+            f"the plan slides a loaded foot {worst * 1e3:.1f} mm along the plane in double "
+            f"support (threshold {SLIP_DISTANCE * 1e3:g} mm)",
+        )
+    ]
+
+
+def planned_slide(plan) -> float:
+    """Largest planned slide of a loaded foot in double support [m] (see ``foot_slide``)."""
+    return max((float(moved.max()) for _, moved in _loaded_runs(plan)), default=0.0)
+
+
+def _loaded_runs(plan):
+    """(first sample, distance moved since it) of each DSP run where the second foot is loaded."""
+    weight = plan.spec.total_mass * G
+    loaded = plan.double_support & (plan.swing_force[:, 2] > LOADED_FRACTION * weight)
+    edges = np.diff(np.concatenate([[0], loaded.astype(int), [0]]))
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        yield a, np.hypot(*(plan.swing_sole[a:b, :2] - plan.swing_sole[a, :2]).T)
+
+
+def strike_events(walk, stiffness: float) -> list[PredictedEvent]:
+    """``strike`` where a swing-sole strike turns the stance foot past TIP_ANGLE (``strike``).
+
+    Args:
+        walk: The compliance-aware walk (``compliance.CompliantWalk``).
+        stiffness: The servo's kp [N m/rad].
+    """
+    plan = walk.plan
+    theta = strike_roll(plan, stiffness)
+    over = np.flatnonzero(theta > TIP_ANGLE)
+    if not over.size:
+        return []
+    k = over[0]
+    return [
+        PredictedEvent(
+            float(plan.t[k]),
+            "strike",
+            f"the sagging servos put the swing sole {-plan.swing_sole[:, 2].min() * 1e3:.1f} mm "
+            f"into the plane in single support: it props the robot up and turns the stance "
+            f"foot {np.rad2deg(theta.max()):.1f} deg (tip angle {np.rad2deg(TIP_ANGLE):g} deg)",
+        )
+    ]
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The analytic prediction of one trial.
+
+    Attributes:
+        verdict: The most severe of ``events`` or ``stable``.
+        events: Predicted events, by time.
+        rotation: Support rotation about its edge [rad], (n,).
+        slide: Predicted slide from friction beyond μ [m], (n,).
+    """
+
+    verdict: str
+    events: list[PredictedEvent]
+    rotation: np.ndarray
+    slide: np.ndarray
+
+
+def predict(plan, *, friction: float, walk=None, stiffness: float | None = None) -> Prediction:
+    """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
+
+    Args:
+        plan: The planned walk (joint limits and foot slide are the plan's).
+        friction: Coulomb μ of the feet on the plane.
+        walk: The compliance-aware walk (``compliance.CompliantWalk``) the servo makes;
+            tip, slip and strike are judged on it. None: on ``plan`` itself, no strike.
+        stiffness: The servo's kp [N m/rad], with ``walk``.
+    """
+    made = plan if walk is None else walk.plan
+    events = joint_limit_events(plan) + foot_slide_events(plan)
+    tips, rotation = tip_events(made)
+    slips, slide = slip_events(made, friction)
+    events += tips + slips
+    if walk is not None:
+        if not walk.converged:
+            events.append(
+                PredictedEvent(
+                    0.0,
+                    "strike",
+                    "no pose where the servos hold the planned torques "
+                    "(the compliance fixed point does not converge)",
+                )
+            )
+        else:
+            events += strike_events(walk, stiffness)
+    events.sort(key=lambda e: (e.time, e.kind))
+    return Prediction(verdict(events), events, rotation, slide)

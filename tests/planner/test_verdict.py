@@ -1,0 +1,79 @@
+"""Predicted events: joint limits, the planned foot slide, slip beyond μ, severity order."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from planner.compliance import compliant_walk
+from planner.plan import plan_walk
+from planner.trajectory import GaitParams
+from planner.verdict import (
+    SLIP_DISTANCE,
+    PredictedEvent,
+    planned_slide,
+    predict,
+    slip_events,
+    verdict,
+)
+
+
+@pytest.fixture(scope="module")
+def plan(spec):
+    return plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=2))
+
+
+def test_a_knee_beyond_its_limit_is_predicted(spec, plan):
+    low = replace(spec, joint_limits={**spec.joint_limits, "knee": (-0.1, 1.2)})
+    tight = plan_walk(low, plan.params)
+    result = predict(tight, friction=1.0)
+    assert result.verdict == "joint_limit"
+    knees = [e for e in result.events if e.kind == "joint_limit"]
+    assert {e.cause.split()[0] for e in knees} == {"stance_knee", "swing_knee"}
+    assert predict(plan, friction=1.0).verdict == "stable"
+
+
+def test_the_planned_rear_foot_slide_is_hip_width_times_secant_minus_one(spec, plan):
+    """No hip roll: the loaded rear foot moves sideways by Lh (1/cos λ − 1) as the lean turns."""
+    expected = spec.hip_width * (1 / np.cos(plan.params.tilt) - 1)  # 1.9 mm at 12°
+    assert planned_slide(plan) == pytest.approx(expected, rel=0.15)
+    assert not [e for e in predict(plan, friction=1.0).events if e.kind == "foot_slide"]
+
+
+def test_a_wide_robot_slides_its_rear_foot_past_the_slip_threshold(spec):
+    wide = replace(spec, hip_width=0.37)  # 0.37 (1/cos 12° − 1) = 8.3 mm
+    plan = plan_walk(wide, GaitParams.nominal(wide, 1.0, steps=2))
+    assert planned_slide(plan) > SLIP_DISTANCE
+    kinds = [e.kind for e in predict(plan, friction=1.0).events]
+    assert "foot_slide" in kinds
+
+
+def test_slip_needs_the_excess_friction_long_enough(plan):
+    need = plan.friction_ratio.max()
+    assert slip_events(plan, friction=need * 1.01)[0] == []
+    events, slide = slip_events(plan, friction=0.2 * need)
+    assert events and events[0].kind == "slip"
+    assert slide.max() > SLIP_DISTANCE
+
+
+def test_verdict_is_the_most_severe_event():
+    def e(kind):
+        return PredictedEvent(0.0, kind, "")
+
+    assert verdict([]) == "stable"
+    assert verdict([e("foot_slide"), e("slip")]) == "slip"
+    assert verdict([e("slip"), e("tip"), e("strike")]) == "tip"
+    assert verdict([e("tip"), e("joint_limit")]) == "joint_limit"
+
+
+def test_a_sagging_servo_strikes_the_plane(spec):
+    """0.8 s steps on the AX-12A: the swing sole would go ~25 mm into the plane and roll the
+    stance foot ~7.5 deg (tip angle 5); a feedforward loop (no sag) does not."""
+    plan = plan_walk(spec, GaitParams.nominal(spec, 0.8))
+    damping = spec.stall_torque / spec.no_load_speed
+    walk = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, armature=spec.armature)
+    soft = predict(plan, friction=1.0, walk=walk, stiffness=spec.stiffness)
+    assert "strike" in [e.kind for e in soft.events]
+    fed = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, feedforward=plan.tau)
+    held = predict(plan, friction=1.0, walk=fed, stiffness=spec.stiffness)
+    assert "strike" not in [e.kind for e in held.events]
