@@ -39,6 +39,7 @@ def gait_from_args(args, spec):
 def plan(args) -> None:
     from planner.plan import plan_walk
     from planner.spec import load_spec
+    from planner.verdict import predict
 
     check_output(args.out)
     spec = load_spec(args.robot)
@@ -56,6 +57,10 @@ def plan(args) -> None:
         f"verdict: {summary['verdict']}  (min ZMP margin {summary['min_margin_m'] * 1e3:.2f} mm"
         f" at t = {summary['time_of_min_margin_s']:.3f} s)"
     )
+    predicted = predict(plan, friction=np.inf)  # no μ here: slip is judged by `trial`
+    print(f"predicted: {predicted.verdict}  (joint limits, foot slide, tip; rigid servos)")
+    for event in predicted.events[:8]:
+        print(f"  {event.time:7.3f} s  {event.kind:<12} {event.cause}")
     print(
         f"work: {summary['work_J']:.4f} J   max friction ratio: "
         f"{summary['max_friction_ratio']:.3f}   max |ZMP - LIPM|: "

@@ -121,6 +121,11 @@ def outcome_columns(result, plan) -> dict:
         "work_J": float(plan.work.sum()),
         "standing_fraction": result.standing_fraction,
         "sim_steps": int(result.sim_steps),
+        "compliant_verdict": result.compliant_verdict,
+        "compliant_min_margin_mm": result.compliant_min_margin * 1e3,
+        "predicted_verdict": result.predicted_verdict,
+        "predicted_events": ";".join(dict.fromkeys(e.kind for e in result.predicted_events)),
+        "unplanned_support_s": result.unplanned_support_s,
         "error": "",
     }
 

@@ -76,6 +76,12 @@ COLUMNS = (
     "work_J",  # planned joint work, Plan.work.sum()
     "standing_fraction",
     "sim_steps",
+    # fidelity (bench/sim/prediction.py, bench/sim/support.py)
+    "compliant_verdict",  # the paper's ZMP test on the walk the servos reach
+    "compliant_min_margin_mm",
+    "predicted_verdict",  # the most severe predicted event, or stable
+    "predicted_events",  # predicted kinds in order of first occurrence, ";"-joined
+    "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
     "error",  # the one-line message of a trial that raised or killed its worker, else empty
 )
 ANALYTIC_VERDICTS = ("stable", "zmp_outside", "error")
@@ -95,13 +101,17 @@ DECIMALS = {  # outcome columns: digits after the point (module doc)
     "peak_torque_simulated_Nm": 6,
     "work_J": 7,
     "standing_fraction": 6,
+    "compliant_min_margin_mm": 4,
+    "unplanned_support_s": 4,
 }
 HEADER = (",".join(COLUMNS) + "\n").encode()
 # A sweep that names a controller somewhere: one more input, last, so every other
 # column keeps its place ("none" for a trial played open loop).
 CONTROLLER_COLUMNS = (*COLUMNS, "controller")
 CONTROLLER_HEADER = (",".join(CONTROLLER_COLUMNS) + "\n").encode()
-PREVIOUS_COLUMNS = (*COLUMNS[:-1], "wall_s", "error")  # before fixed precision: a wall time
+_FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the older versions'
+# before fixed precision: a wall time, and no fidelity columns
+PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
 PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
 _ID_CHARS = frozenset("0123456789abcdef")
 

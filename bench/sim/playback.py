@@ -118,9 +118,12 @@ def feedforward_torque(plan: Plan, servo: Servo) -> np.ndarray:
     speed; clipped to ±``servo.force_limit``. Dry friction is left out (its sign
     flips with the speed). The actuator's forcerange clips the loop's total again.
     """
-    qd, qdd = (stance_swing_to_left_right(x, plan.stance) for x in (plan.qd, plan.qdd))
-    tau = stance_swing_to_left_right(plan.tau, plan.stance)
-    total = tau + servo.armature * qdd + (servo.damping + servo.kv) * qd
+    return stance_swing_to_left_right(feedforward_stance_swing(plan, servo), plan.stance)
+
+
+def feedforward_stance_swing(plan: Plan, servo: Servo) -> np.ndarray:
+    """``feedforward_torque`` in the plan's Table-I order [N m], (n, 8)."""
+    total = plan.tau + servo.armature * plan.qdd + (servo.damping + servo.kv) * plan.qd
     return np.clip(total, -servo.force_limit, servo.force_limit)
 
 

@@ -14,9 +14,14 @@ stands (before any tip or fall, both values finite), the margin of each to the
 planned support polygon, both verdicts, the events, the required friction ratio
 against μ, and planned vs simulated joint angles.
 
-Analytic verdict: ``stable`` when the ZMP stays inside the support polygon at
-every sample, else ``zmp_outside``; ``slip_predicted`` when the required friction
-|F_t|/F_n of the planned ground force exceeds μ somewhere.
+Analytic verdicts (``prediction.py``): the paper's, ``analytic_verdict``: ``stable``
+when the planned ZMP stays inside the support polygon at every sample, else
+``zmp_outside``; ``compliant_verdict``, the same test on the walk the trial's servo
+reaches under the planned torques (series ``zmp_compliant``); ``predicted_verdict``,
+the most severe predicted event (joint_limit, tip, strike, slip, foot_slide) or
+``stable``, with ``predicted_events``. ``slip_predicted`` when the required friction
+|F_t|/F_n of the planned ground force exceeds μ somewhere. ``unplanned_support_s``
+(``support.py``): foot-time the simulated contacts differed from the plan's.
 """
 
 from __future__ import annotations
@@ -31,6 +36,8 @@ from bench.controllers import check_controller_name
 from bench.sim.events import Event, detect, verdict
 from bench.sim.model import SceneError, check_scene_options
 from bench.sim.playback import Recording, play
+from bench.sim.prediction import predict_trial
+from bench.sim.support import support_difference
 from planner.joints import stance_swing_to_left_right
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec
@@ -96,6 +103,12 @@ class TrialResult:
     wall_s: float
     sim_steps: int
     series: dict = field(repr=False, compare=False)
+    compliant_verdict: str = "stable"  # the paper's test on the walk the servo reaches
+    compliant_min_margin: float = float("nan")  # [m]
+    predicted_verdict: str = "stable"  # the most severe predicted event
+    predicted_events: list = field(default_factory=list)  # planner.verdict.PredictedEvent
+    unplanned_contact_s: float = 0.0  # [s] foot-time touching where the plan has it lifted
+    missed_contact_s: float = 0.0  # [s] foot-time lifted where the plan has it down
 
     def scalars(self) -> dict:
         """Everything but the series, strict JSON (angles in degrees at this edge).
@@ -107,7 +120,8 @@ class TrialResult:
         gait = asdict(self.trial.gait)
         gait["slope_deg"] = float(np.rad2deg(gait.pop("slope")))
         gait["tilt_deg"] = float(np.rad2deg(gait.pop("tilt")))
-        out = {k: v for k, v in asdict(self).items() if k not in ("trial", "series", "events")}
+        skip = ("trial", "series", "events", "predicted_events")
+        out = {k: v for k, v in asdict(self).items() if k not in skip}
         out["trial"] = {
             "gait": gait,
             **{k: v for k, v in asdict(self.trial).items() if k != "gait"},
@@ -115,11 +129,18 @@ class TrialResult:
         if self.trial.controller is None:  # open loop: the output as before controllers
             del out["trial"]["controller"]
         out["events"] = [{**asdict(e), "phase": self.phase(e.time)} for e in self.events]
+        out["predicted_events"] = [asdict(e) for e in self.predicted_events]
+        out["unplanned_support_s"] = self.unplanned_support_s
         out = json.loads(json.dumps(out, default=float), parse_constant=lambda _: None)
         missing = [k for k, v in out.items() if v is None]
         if missing:
             out["null_because"] = {k: self.why_missing() for k in missing}
         return out
+
+    @property
+    def unplanned_support_s(self) -> float:
+        """Foot-time [s] the simulated support differed from the plan's, both ways."""
+        return self.unplanned_contact_s + self.missed_contact_s
 
     def phase(self, time: float) -> str:
         """ "settling" before the walk starts (t < 0), "walk", or "hold" after its end."""
@@ -148,11 +169,20 @@ class TrialResult:
             f"analytic:  {self.analytic_verdict:<12} min ZMP margin "
             f"{self.analytic_min_margin * 1e3:7.2f} mm, max friction ratio "
             f"{self.max_friction_ratio:.3f} ({'>' if self.slip_predicted else '<='} mu)",
+            f"compliant: {self.compliant_verdict:<12} min ZMP margin "
+            f"{_mm(self.compliant_min_margin):>7} mm (the walk the servos reach)",
+            f"predicted: {self.predicted_verdict:<12}"
+            + "; ".join(
+                f"{e.kind} at {e.time:.3f} s: {e.cause}" for e in self.predicted_events[:2]
+            ),
             f"simulated: {self.simulated_verdict:<12} min CoP margin "
             f"{_mm(self.simulated_min_margin):>7} mm, max friction ratio "
             f"{_num(self.simulated_max_friction_ratio, '.3f')}",
             f"ZMP analytic vs simulated: RMS {_mm(self.zmp_rms)} mm, max "
             f"{_mm(self.zmp_max)} mm over {self.standing_fraction:.0%} of the walk",
+            f"unplanned support {self.unplanned_support_s:.3f} s (foot-time touching while "
+            f"planned lifted {self.unplanned_contact_s:.3f} s, lifted while planned down "
+            f"{self.missed_contact_s:.3f} s)",
             f"joint tracking RMS {_num(np.rad2deg(self.tracking_rms), '.2f')} deg; peak torque "
             f"planned {self.peak_torque_planned:.3f} / simulated "
             f"{self.peak_torque_simulated:.3f} N m",
@@ -223,6 +253,9 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
     idx = np.clip(np.searchsorted(plan.t, tw), 0, plan.t.size - 1)
     polygon = plan.polygon[idx]
     sim_margin = signed_margin(np.nan_to_num(cop), polygon)[standing]
+    predicted = predict_trial(plan, friction=trial.friction, actuators=trial.actuators)
+    rows = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(lost, default=np.inf))
+    support = support_difference(plan, recording, rows)
     q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
     tracking = (s.q[walk] - q_plan)[standing]
     force = s.foot_force[walk].sum(axis=1)[standing]
@@ -253,6 +286,12 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         peak_torque_simulated=float(np.abs(s.actuator_force[walk]).max()),
         wall_s=wall_s,
         sim_steps=int(t.size),
+        compliant_verdict=predicted.compliant_verdict,
+        compliant_min_margin=float(np.min(predicted.walk.plan.margin)),
+        predicted_verdict=predicted.verdict,
+        predicted_events=predicted.prediction.events,
+        unplanned_contact_s=support.unplanned_contact_s,
+        missed_contact_s=support.missed_contact_s,
         series={
             "t": tw,
             "zmp_analytic": zmp,
@@ -264,6 +303,8 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
             "q_simulated": s.q[walk],
             "standing": standing,
             "margin_analytic": on_walk(plan.margin)[:, 0],
+            "zmp_compliant": on_walk(predicted.walk.plan.zmp),
+            "margin_compliant": on_walk(predicted.walk.plan.margin)[:, 0],
             "actuator_force": s.actuator_force[walk],
             "sole": s.sole[walk],
             "pelvis_height": s.pelvis_height[walk],

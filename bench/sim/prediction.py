@@ -1,0 +1,67 @@
+"""The analytic prediction of one trial: the paper's test, the compliance-aware walk, events.
+
+Three predictions sit side by side (``TrialPrediction``):
+
+* the paper's verdict: the planned ZMP inside the support polygon at every sample
+  (``Plan.stable``), ``stable`` or ``zmp_outside``;
+* the compliance-aware verdict: the same test on the walk the trial's servo
+  actually makes under the planned torques (``planner.compliance``), with its own
+  ZMP trace and margin;
+* the predicted verdict: the most severe event ``planner.verdict.predict`` finds on
+  that walk (joint_limit, tip, strike, slip, foot_slide), or ``stable``.
+
+The servo is the trial's actuator mode (``model.servo_settings``), and in a
+feedforward mode the loop is fed the same clipped torque as in the simulation
+(``playback.feedforward_torque``), so the prediction models the loop that is played.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bench.sim.model import servo_settings
+from bench.sim.playback import feedforward_stance_swing
+from planner.compliance import CompliantWalk, compliant_walk
+from planner.plan import Plan
+from planner.verdict import Prediction, predict
+
+
+@dataclass(frozen=True)
+class TrialPrediction:
+    """Analytic predictions of one trial (see module doc).
+
+    Attributes:
+        paper_verdict: "stable" or "zmp_outside" (the planned ZMP).
+        compliant_verdict: "stable" or "zmp_outside" (the ZMP of the walk the servo makes).
+        walk: The compliance-aware walk; ``walk.plan.zmp`` its ZMP trace [m], (n, 2).
+        prediction: Predicted events and the verdict they imply.
+    """
+
+    paper_verdict: str
+    compliant_verdict: str
+    walk: CompliantWalk
+    prediction: Prediction
+
+    @property
+    def verdict(self) -> str:
+        return self.prediction.verdict
+
+
+def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPrediction:
+    """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ."""
+    servo = servo_settings(plan.spec, actuators)
+    walk = compliant_walk(
+        plan,
+        stiffness=servo.kp,
+        velocity_gain=servo.kv,
+        damping=servo.damping,
+        armature=servo.armature,
+        feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
+    )
+    prediction = predict(plan, friction=friction, walk=walk, stiffness=servo.kp)
+    return TrialPrediction(
+        paper_verdict="stable" if plan.stable else "zmp_outside",
+        compliant_verdict="stable" if walk.converged and walk.plan.stable else "zmp_outside",
+        walk=walk,
+        prediction=prediction,
+    )
