@@ -120,6 +120,9 @@ def edge_inertia(plan, rows, edge_point, edge_direction) -> np.ndarray:
     return np.einsum("l,kl->k", chain.mass, distance2) + spin.sum(axis=1)
 
 
+FALLEN = np.pi / 2  # [rad]: a rotation past this is reported as this (the robot is down)
+
+
 def foot_rotation(plan, margin=None, zmp=None) -> np.ndarray:
     """Predicted rotation of the support about its edge [rad], (n,) (see module doc).
 
@@ -153,7 +156,7 @@ def foot_rotation(plan, margin=None, zmp=None) -> np.ndarray:
         point, inward, inertia = pivot
         beyond = -float((zmp[k] - point) @ inward)
         v += normal[k] * (beyond + height[k] * x) / inertia * dt[k]
-        x += v * dt[k]
+        x = min(x + v * dt[k], FALLEN)
         if x <= 0.0:
             x, v, pivot = 0.0, 0.0, None  # flat again (no bounce)
         theta[k] = x

@@ -42,3 +42,19 @@ def test_nominal_gait_scales_with_the_robot(spec, factor):
     # knees' bend included) is the paper robot's; the ZMP need not scale (same T, same g).
     plan, plan_scaled = plan_walk(spec, gait), plan_walk(big, scaled)
     np.testing.assert_allclose(plan_scaled.q, plan.q, atol=1e-9)
+
+
+def test_the_swing_sole_lands_at_rest_exactly_at_the_planned_touch_down(spec):
+    """Height 0 and zero normal speed at each DSP start (the clamped end of the height spline)."""
+    from planner.plan import plan_walk
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=2))
+    dt = plan.params.dt
+    speed = np.gradient(plan.swing_sole[:, 2], dt)
+    for k in (1, 2):  # the touch-downs at t = k T
+        i = int(round(k * plan.params.step_time / dt))
+        assert plan.double_support[i] and not plan.double_support[i - 1]
+        assert abs(plan.swing_sole[i, 2]) < 1e-9
+        ssp = slice(i - int(plan.params.ssp_fraction * plan.params.step_time / dt) + 1, i)
+        peak = np.abs(speed[ssp]).max()
+        assert abs(speed[i - 1]) < 0.02 * peak  # 1 ms before: at rest to 2 % of the swing
