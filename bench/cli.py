@@ -327,6 +327,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _command(
         sub,
+        "fidelity",
+        "agreement of each analytic verdict with the simulated one, from sweep tables",
+        "Read sweep tables (DIR/sweep.csv of `slopewalk sweep`) and write a markdown report: "
+        "how often the paper's verdict, the compliance-aware one and the predicted one (the "
+        "most severe predicted event) agree with the simulated verdict, both confusion "
+        "tables, and every disagreement of the predicted verdict with its measured causes.",
+        "slopewalk fidelity runs/paper/sweep.csv runs/dense/sweep.csv --out results/fidelity.md",
+    )
+    p.add_argument("tables", nargs="+", metavar="TABLE", help="sweep.csv files")
+    p.add_argument("--out", required=True, metavar="FILE", help="markdown report")
+    p.set_defaults(run=commands.fidelity)
+
+    p = _command(
+        sub,
         "benchmark",
         "print speed figures as name: value lines",
         "Measure how fast a part of the bench runs and print one 'name: value' line per "

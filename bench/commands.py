@@ -197,6 +197,16 @@ def optimize(args) -> None:
     print("wrote " + ", ".join(str(p) for p in outputs))
 
 
+def fidelity(args) -> None:
+    from bench.report.fidelity import fidelity_report, read_tables
+
+    check_output(args.out)
+    text = fidelity_report(read_tables(args.tables))
+    with atomic_paths(args.out) as (tmp,):
+        tmp.write_text(text)
+    print(f"wrote {args.out}")
+
+
 def compare(args) -> None:
     from bench.experiments import compare as comparison
     from planner.spec import load_spec

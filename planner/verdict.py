@@ -20,8 +20,11 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   foot in double support drifts sideways by hip width × (1/cos λ − 1) as the lean
   changes, with no hip roll to absorb it) by more than ``SLIP_DISTANCE``.
 
-Verdict: the most severe predicted event, in the order joint_limit, tip, strike,
-slip, foot_slide; ``stable`` when none.
+* ``saturation``: the walk needs more torque from a servo than its limit (the
+  stall torque for ``servo``): the joint cannot follow the plan from there on.
+
+Verdict: the most severe predicted event, in the order joint_limit, saturation,
+tip, strike, slip, foot_slide; ``stable`` when none.
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ LOADED_FRACTION = 0.10  # of the robot's weight
 TIP_ANGLE = np.deg2rad(5.0)  # [rad]
 G = 9.81  # [m/s²]
 
-PREDICTED_KINDS = ("joint_limit", "tip", "strike", "slip", "foot_slide")
+PREDICTED_KINDS = ("joint_limit", "saturation", "tip", "strike", "slip", "foot_slide")
 SEVERITY = {kind: len(PREDICTED_KINDS) - i for i, kind in enumerate(PREDICTED_KINDS)}
 
 
@@ -198,7 +201,38 @@ class Prediction:
     slide: np.ndarray
 
 
-def predict(plan, *, friction: float, walk=None, stiffness: float | None = None) -> Prediction:
+def saturation_events(walk, force_limit: float) -> list[PredictedEvent]:
+    """``saturation`` where the servo must deliver more than its torque limit.
+
+    The loop torque of the reached walk (``CompliantWalk.loop_torque``: what the
+    joint needs, τ + A q̈ + d q̇, less nothing) beyond the servo's limit cannot be
+    delivered: the joint falls behind the plan from there on, by an amount no
+    stiffness bounds.
+    """
+    over = np.abs(walk.loop_torque) > force_limit
+    if not over.any():
+        return []
+    k, j = np.unravel_index(np.argmax(over), over.shape)
+    peak = np.abs(walk.loop_torque).max(axis=0)
+    worst = int(np.argmax(peak))
+    return [
+        PredictedEvent(
+            float(walk.plan.t[k]),
+            "saturation",
+            f"{JOINT_NAMES[worst]} needs {peak[worst]:.2f} N m of a servo limited to "
+            f"{force_limit:g} N m (first {JOINT_NAMES[j]})",
+        )
+    ]
+
+
+def predict(
+    plan,
+    *,
+    friction: float,
+    walk=None,
+    stiffness: float | None = None,
+    force_limit: float = np.inf,
+) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
 
     Args:
@@ -207,6 +241,7 @@ def predict(plan, *, friction: float, walk=None, stiffness: float | None = None)
         walk: The compliance-aware walk (``compliance.CompliantWalk``) the servo makes;
             tip, slip and strike are judged on it. None: on ``plan`` itself, no strike.
         stiffness: The servo's kp [N m/rad], with ``walk``.
+        force_limit: The servo's torque limit [N m], with ``walk``.
     """
     made = plan if walk is None else walk.plan
     events = joint_limit_events(plan) + foot_slide_events(plan)
@@ -224,6 +259,6 @@ def predict(plan, *, friction: float, walk=None, stiffness: float | None = None)
                 )
             )
         else:
-            events += strike_events(walk, stiffness)
+            events += strike_events(walk, stiffness) + saturation_events(walk, force_limit)
     events.sort(key=lambda e: (e.time, e.kind))
     return Prediction(verdict(events), events, rotation, slide)

@@ -125,6 +125,7 @@ def outcome_columns(result, plan) -> dict:
         "compliant_min_margin_mm": result.compliant_min_margin * 1e3,
         "predicted_verdict": result.predicted_verdict,
         "predicted_events": ";".join(dict.fromkeys(e.kind for e in result.predicted_events)),
+        "predicted_rotation_deg": float(np.rad2deg(result.predicted_rotation)),
         "unplanned_support_s": result.unplanned_support_s,
         "error": "",
     }

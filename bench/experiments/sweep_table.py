@@ -81,6 +81,7 @@ COLUMNS = (
     "compliant_min_margin_mm",
     "predicted_verdict",  # the most severe predicted event, or stable
     "predicted_events",  # predicted kinds in order of first occurrence, ";"-joined
+    "predicted_rotation_deg",  # largest predicted turn of the support about its edge
     "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
     "error",  # the one-line message of a trial that raised or killed its worker, else empty
 )

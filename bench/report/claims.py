@@ -409,7 +409,26 @@ def confusion(rows) -> str:
             f"{r['friction']:g}, {r['mass_scale'] or 'nominal masses'}: analytic {a}, "
             f"simulated {s} — {why}"
         )
+    if rows and "predicted_verdict" in rows[0]:
+        lines += _predicted_confusion(rows)
     return "\n".join(lines) + "\n"
+
+
+def _predicted_confusion(rows) -> list[str]:
+    """The predicted verdict (most severe predicted event) × simulated, and its disagreements."""
+    from bench.report.fidelity import confusion_table, disagreement_cause
+    from planner.verdict import PREDICTED_KINDS
+
+    lines = ["", "# Predicted vs simulated verdicts", ""]
+    lines += confusion_table(rows, "predicted_verdict", ("stable", *PREDICTED_KINDS))
+    lines += ["", "## Disagreements", ""]
+    for r in rows:
+        if (r["predicted_verdict"] == "stable") != (r["simulated_verdict"] == "stable"):
+            lines.append(
+                f"- t_c {r['step_time']:g} s, slope {r['slope_deg']:g}°, μ {r['friction']:g}, "
+                f"{r['mass_scale'] or 'nominal masses'}: {disagreement_cause(r)}"
+            )
+    return lines
 
 
 def write_report(

@@ -8,7 +8,7 @@ Three predictions sit side by side (``TrialPrediction``):
   actually makes under the planned torques (``planner.compliance``), with its own
   ZMP trace and margin;
 * the predicted verdict: the most severe event ``planner.verdict.predict`` finds on
-  that walk (joint_limit, tip, strike, slip, foot_slide), or ``stable``.
+  that walk (joint_limit, saturation, tip, strike, slip, foot_slide), or ``stable``.
 
 The servo is the trial's actuator mode (``model.servo_settings``), and in a
 feedforward mode the loop is fed the same clipped torque as in the simulation
@@ -58,7 +58,9 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         armature=servo.armature,
         feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
     )
-    prediction = predict(plan, friction=friction, walk=walk, stiffness=servo.kp)
+    prediction = predict(
+        plan, friction=friction, walk=walk, stiffness=servo.kp, force_limit=servo.force_limit
+    )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
         compliant_verdict="stable" if walk.converged and walk.plan.stable else "zmp_outside",

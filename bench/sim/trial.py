@@ -18,7 +18,8 @@ Analytic verdicts (``prediction.py``): the paper's, ``analytic_verdict``: ``stab
 when the planned ZMP stays inside the support polygon at every sample, else
 ``zmp_outside``; ``compliant_verdict``, the same test on the walk the trial's servo
 reaches under the planned torques (series ``zmp_compliant``); ``predicted_verdict``,
-the most severe predicted event (joint_limit, tip, strike, slip, foot_slide) or
+the most severe predicted event (joint_limit, saturation, tip, strike, slip,
+foot_slide) or
 ``stable``, with ``predicted_events``. ``slip_predicted`` when the required friction
 |F_t|/F_n of the planned ground force exceeds μ somewhere. ``unplanned_support_s``
 (``support.py``): foot-time the simulated contacts differed from the plan's.
@@ -107,6 +108,7 @@ class TrialResult:
     compliant_min_margin: float = float("nan")  # [m]
     predicted_verdict: str = "stable"  # the most severe predicted event
     predicted_events: list = field(default_factory=list)  # planner.verdict.PredictedEvent
+    predicted_rotation: float = 0.0  # [rad] largest predicted turn of the support
     unplanned_contact_s: float = 0.0  # [s] foot-time touching where the plan has it lifted
     missed_contact_s: float = 0.0  # [s] foot-time lifted where the plan has it down
 
@@ -290,6 +292,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         compliant_min_margin=float(np.min(predicted.walk.plan.margin)),
         predicted_verdict=predicted.verdict,
         predicted_events=predicted.prediction.events,
+        predicted_rotation=float(np.max(predicted.prediction.rotation, initial=0.0)),
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         series={

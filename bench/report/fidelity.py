@@ -1,0 +1,218 @@
+"""Fidelity report: how often each analytic verdict agrees with MuJoCo, and why not.
+
+``fidelity_report(tables)`` turns sweep tables (``sweep_table.read_table`` rows)
+into markdown: per table, the agreement of the paper's verdict (planned ZMP
+inside the polygon), the compliance-aware verdict and the predicted verdict
+(the most severe predicted event) with the simulated one, counting "walks"
+(``stable``) against "does not"; both confusion tables; each disagreement of
+the predicted verdict with the measured quantities that explain it; and the
+issue's goals where the table holds their cells (flat 2 s stiff CoP RMS,
+``servo_ff`` on every cell with ≥ 5 mm planned margin within the joint limits).
+"""
+
+from __future__ import annotations
+
+import csv
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import SlopewalkError
+from planner.verdict import LOADED_FRACTION, PREDICTED_KINDS, SLIP_DISTANCE, TIP_ANGLE
+
+VERDICTS = ("paper", "compliant", "predicted")
+_COLUMN = {
+    "paper": "analytic_verdict",
+    "compliant": "compliant_verdict",
+    "predicted": "predicted_verdict",
+}
+REQUIRED = (
+    *_COLUMN.values(),
+    "predicted_events",
+    "predicted_rotation_deg",
+    "compliant_min_margin_mm",
+    "unplanned_support_s",
+)
+SIM_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
+MARGIN_GOAL_MM = 5.0  # servo_ff goal: cells whose plan keeps this margin
+
+
+class FidelityError(SlopewalkError):
+    """A table that is missing, unreadable or not a sweep table of this version."""
+
+
+def fidelity_report(tables: dict[str, list[dict]]) -> str:
+    """Markdown report of ``tables`` (name → rows), see module doc."""
+    lines = ["# Fidelity: the analytic predictions against MuJoCo", ""]
+    lines += _thresholds()
+    for name, rows in tables.items():
+        missing = [c for c in REQUIRED if rows and c not in rows[0]]
+        if missing:
+            raise FidelityError(
+                f"{name}: no column {missing[0]} (a sweep table of an older version; re-run it)"
+            )
+        lines += _table_section(name, rows)
+    return "\n".join(lines) + "\n"
+
+
+def _thresholds() -> list[str]:
+    return [
+        "Thresholds (one definition, `planner/verdict.py`, shared with the simulator's "
+        "events in `bench/sim/events.py`, where their physical basis is stated): "
+        f"tip angle {np.rad2deg(TIP_ANGLE):g}°, slip distance {SLIP_DISTANCE * 1e3:g} mm, "
+        f"loaded foot > {LOADED_FRACTION:.0%} of the weight. Agreement counts a verdict "
+        "as right when it says `stable` exactly where the simulated robot walks (no slip, "
+        "tip, fall or divergence).",
+        "",
+    ]
+
+
+def _walks(verdict) -> bool:
+    return verdict == "stable"
+
+
+def _table_section(name: str, rows: list[dict]) -> list[str]:
+    rows = [r for r in rows if r["simulated_verdict"] != "error"]
+    n = len(rows)
+    lines = [f"## {name}: {n} trials", "", "| verdict | agrees | share |", "|---|---|---|"]
+    for v in VERDICTS:
+        ok = sum(_walks(r[_COLUMN[v]]) == _walks(r["simulated_verdict"]) for r in rows)
+        lines.append(f"| {v} | {ok}/{n} | {ok / n:.1%} |" if n else f"| {v} | 0/0 | - |")
+    modes = sorted({r["actuators"] for r in rows})
+    if len(modes) > 1:
+        lines += ["", "By actuator mode (predicted verdict): " + ", ".join(_by_mode(rows, modes))]
+    lines += ["", "### Paper's verdict × simulated", ""]
+    lines += confusion_table(rows, "analytic_verdict", ("stable", "zmp_outside"))
+    lines += ["", "### Predicted verdict × simulated", ""]
+    lines += confusion_table(rows, "predicted_verdict", ("stable", *PREDICTED_KINDS))
+    lines += _goals(rows)
+    wrong = [r for r in rows if _walks(r["predicted_verdict"]) != _walks(r["simulated_verdict"])]
+    lines += ["", f"### Disagreements of the predicted verdict ({len(wrong)})", ""]
+    lines += [f"- {_label(r)}: {disagreement_cause(r)}" for r in wrong] or ["none"]
+    return lines + [""]
+
+
+def _by_mode(rows, modes) -> list[str]:
+    out = []
+    for mode in modes:
+        sub = [r for r in rows if r["actuators"] == mode]
+        ok = sum(_walks(r["predicted_verdict"]) == _walks(r["simulated_verdict"]) for r in sub)
+        out.append(f"{mode} {ok}/{len(sub)}")
+    return out
+
+
+def confusion_table(rows, column, kinds) -> list[str]:
+    counts = Counter((r[column], r["simulated_verdict"]) for r in rows)
+    sims = [s for s in SIM_VERDICTS if any(k[1] == s for k in counts)]
+    lines = [
+        "| analytic \\ simulated | " + " | ".join(sims) + " |",
+        "|---|" + "---|" * len(sims),
+    ]
+    for kind in kinds:
+        if any(k[0] == kind for k in counts):
+            lines.append(f"| {kind} | " + " | ".join(str(counts[(kind, s)]) for s in sims) + " |")
+    return lines
+
+
+def _goals(rows) -> list[str]:
+    lines = []
+    flat = [
+        r
+        for r in rows
+        if r["step_time"] == 2.0 and r["slope_deg"] == 0 and r["actuators"] in ("stiff", "stiff_ff")
+    ]
+    if flat:
+        lines += ["", "Flat ground, 2 s steps: simulated CoP vs analytic ZMP (RMS, max), "
+                  "unplanned support (foot-time touching where the plan has the foot lifted, "
+                  "or the reverse):", ""]  # fmt: skip
+        lines += [
+            f"- {r['actuators']}, μ {r['friction']:g}: RMS {r['zmp_rms_mm']:.2f} mm, max "
+            f"{r['zmp_max_mm']:.1f} mm, unplanned support {r['unplanned_support_s']:.3f} s"
+            for r in flat
+        ]
+    ff = [
+        r
+        for r in rows
+        if r["actuators"] == "servo_ff"
+        and r["analytic_min_margin_mm"] >= MARGIN_GOAL_MM
+        and "joint_limit" not in str(r["predicted_events"])
+    ]
+    if ff:
+        walked = sum(_walks(r["simulated_verdict"]) for r in ff)
+        lines += [
+            "",
+            f"servo_ff on the cells whose plan keeps ≥ {MARGIN_GOAL_MM:g} mm margin within "
+            f"the joint limits: {walked}/{len(ff)} walk"
+            + (
+                " ("
+                + "; ".join(
+                    f"{_label(r)} {r['simulated_verdict']}"
+                    for r in ff
+                    if not _walks(r["simulated_verdict"])
+                )
+                + ")"  # fmt: skip
+                if walked < len(ff)
+                else ""
+            ),
+        ]
+    return lines
+
+
+def _label(r) -> str:
+    scale = r["mass_scale"] or ""
+    return (
+        f"t_c {r['step_time']:g} s, {r['slope_deg']:g}°, μ {r['friction']:g}, "
+        f"{r['actuators']}" + (f", {scale}" if scale else "")
+    )
+
+
+def disagreement_cause(r) -> str:
+    """The measured quantities behind one disagreement, in one line."""
+    sim = f"simulated {r['simulated_verdict']} ({_events(r['events'])}, first at " + (
+        f"{r['first_event_time_s']:.2f} s)" if _finite(r["first_event_time_s"]) else "-)"
+    )
+    plan = (
+        f"planned ZMP margin {r['analytic_min_margin_mm']:.1f} mm, on the reached walk "
+        f"{r['compliant_min_margin_mm']:.1f} mm"
+    )
+    tracking = (
+        f"joint tracking {r['tracking_rms_deg']:.2f}° RMS"
+        if _finite(r["tracking_rms_deg"])
+        else "no tracking sample"
+    )
+    support = f"unplanned support {r['unplanned_support_s']:.3f} s"
+    rotation = f"predicted support rotation {r['predicted_rotation_deg']:.2f}°"
+    if _walks(r["predicted_verdict"]):
+        return f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
+    return (
+        f"predicted {r['predicted_verdict']} ({_events(r['predicted_events'])}; {rotation}), "
+        f"yet the robot walked; {plan}; {tracking}; {support}"
+    )
+
+
+def _events(text) -> str:
+    return str(text).replace(";", ", ") if text else "no event"
+
+
+def _finite(x) -> bool:
+    return isinstance(x, float) and np.isfinite(x)
+
+
+def read_tables(paths: list[str | Path]) -> dict[str, list[dict]]:
+    """Rows of each sweep table, by its path.
+
+    Raises:
+        FidelityError: a missing or unreadable file, or one that is not a sweep table.
+    """
+    from bench.experiments.sweep_table import read_table
+
+    tables = {}
+    for path in paths:
+        if not Path(path).is_file():
+            raise FidelityError(f"sweep table {str(path)!r}: no such file")
+        try:
+            tables[str(path)] = read_table(path)
+        except (OSError, UnicodeDecodeError, KeyError, csv.Error) as err:
+            raise FidelityError(f"sweep table {str(path)!r}: not a sweep table ({err})") from None
+    return tables
