@@ -201,7 +201,8 @@ def fidelity(args) -> None:
     from bench.report.fidelity import fidelity_report, read_tables
 
     check_output(args.out)
-    text = fidelity_report(read_tables(args.tables))
+    command = "slopewalk fidelity " + " ".join(args.tables) + f" --out {args.out}"
+    text = fidelity_report(read_tables(args.tables), command=command)
     with atomic_paths(args.out) as (tmp,):
         tmp.write_text(text)
     print(f"wrote {args.out}")

@@ -42,9 +42,20 @@ class FidelityError(SlopewalkError):
     """A table that is missing, unreadable or not a sweep table of this version."""
 
 
-def fidelity_report(tables: dict[str, list[dict]]) -> str:
-    """Markdown report of ``tables`` (name → rows), see module doc."""
+def fidelity_report(tables: dict[str, list[dict]], *, command: str = "") -> str:
+    """Markdown report of ``tables`` (name → rows), see module doc.
+
+    Args:
+        tables: Rows of each sweep table, by its path.
+        command: The command line that writes this report, quoted in it.
+    """
     lines = ["# Fidelity: the analytic predictions against MuJoCo", ""]
+    if command:
+        lines += [
+            f"Written by `{command}`; each table by `slopewalk sweep CONFIG --out DIR` "
+            "(DIR/sweep.csv; the configs are in `bench/experiments/sweeps/`).",
+            "",
+        ]
     lines += _thresholds()
     for name, rows in tables.items():
         missing = [c for c in REQUIRED if rows and c not in rows[0]]
