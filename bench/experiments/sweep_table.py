@@ -104,6 +104,7 @@ DECIMALS = {  # outcome columns: digits after the point (module doc)
     "standing_fraction": 6,
     "compliant_min_margin_mm": 4,
     "unplanned_support_s": 4,
+    "predicted_rotation_deg": 5,
 }
 HEADER = (",".join(COLUMNS) + "\n").encode()
 # A sweep that names a controller somewhere: one more input, last, so every other

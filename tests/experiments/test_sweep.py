@@ -1,6 +1,8 @@
 """Whole sweeps: fresh runs and resumes, real signals and real processes, the command line."""
 
 import contextlib
+import csv
+import io
 import os
 import signal
 import subprocess
@@ -20,6 +22,7 @@ from bench.experiments.sweep_table import (
     CONTROLLER_COLUMNS,
     CONTROLLER_HEADER,
     HEADER,
+    PREVIOUS_COLUMNS,
     PREVIOUS_HEADER,
     format_row,
     parse,
@@ -356,9 +359,15 @@ def test_a_table_of_the_previous_version_is_replaced_by_a_fresh_run_only(
     tmp_path, capsys, reference
 ):
     rows, data = reference
-    old = PREVIOUS_HEADER + b"".join(
-        line[: line.rindex(b",")] + b",0.5" + line[line.rindex(b",") :] for line in rows.values()
-    )
+
+    def previous(line: bytes) -> bytes:  # no fidelity columns, a wall time before the error
+        fields = next(csv.reader([line.decode()]))
+        kept = fields[: len(PREVIOUS_COLUMNS) - 2] + ["0.5", fields[-1]]
+        buffer = io.StringIO()
+        csv.writer(buffer, lineterminator="\n").writerow(kept)
+        return buffer.getvalue().encode()
+
+    old = PREVIOUS_HEADER + b"".join(previous(line) for line in rows.values())
     (tmp_path / "sweep.csv").write_bytes(old)
     assert main(["sweep", str(SMOKE), "--out", str(tmp_path), "--resume"]) == 2
     assert "written by an older slopewalk" in capsys.readouterr().err

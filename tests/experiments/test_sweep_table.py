@@ -56,11 +56,17 @@ def test_outcomes_are_written_at_a_fixed_precision():
 CORRUPT = {
     "binary": (bytes(range(256)) * 16, "not UTF-8 text"),
     "binary without newline": (b"\x00\x01" * 2048, "no header line"),
-    "not UTF-8": (HEADER + b"0123456789ab,\xff\xfe\n", "not UTF-8 text: byte 416"),
+    "not UTF-8": (
+        HEADER + b"0123456789ab,\xff\xfe\n",
+        f"not UTF-8 text: byte {len(HEADER) + 13}",  # the \xff after the header and the id
+    ),
     "text without newline": (b"a" * 4096, "no header line"),
     "no header": (format_row(_row()), "its first line is not the header"),
     "other columns": (b"a,b\n1,2\n", "its first line is not the header"),
-    "other version": (b"trial_id,b\n1,2\n", "its header is not that of these 29 columns"),
+    "other version": (
+        b"trial_id,b\n1,2\n",
+        f"its header is not that of these {len(COLUMNS)} columns",
+    ),
     "short row": (HEADER + b"0123456789ab,1.0\n", "line 2 has 2 fields, not"),
     "bad id": (HEADER + format_row(_row(trial_id="abc")), "trial_id 'abc' is not a trial id"),
     "banana": (
