@@ -51,3 +51,20 @@ def test_planner_never_imports_mujoco():
         "planner.zmp, planner.ik, planner.trajectory, planner.newton_euler"
     )
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_plan_reports_a_knee_beyond_its_limit(tmp_path):
+    """The paper's ZMP test alone would say 'stable'; the predicted verdict names the joint."""
+    from planner.spec import default_spec_path
+
+    robot = tmp_path / "low_knee.toml"
+    text = default_spec_path().read_text()
+    assert "knee = [-0.10, 2.60]" in text
+    robot.write_text(text.replace("knee = [-0.10, 2.60]", "knee = [-0.10, 1.20]"))
+    run = _run("plan", "--step-time", "1", "--robot", str(robot), "--out", str(tmp_path / "p.npz"))
+    assert run.returncode == 0, run.stderr
+    assert "verdict: stable" in run.stdout
+    assert "predicted: joint_limit" in run.stdout
+    assert "swing_knee leaves its limits [-0.1, 1.2] rad (knee), up to" in run.stdout
+    default = _run("plan", "--step-time", "1", "--out", str(tmp_path / "q.npz"))
+    assert "predicted: stable" in default.stdout
