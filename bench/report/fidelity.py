@@ -100,6 +100,12 @@ def _table_section(name: str, rows: list[dict]) -> list[str]:
     lines += _goals(rows)
     wrong = [r for r in rows if _walks(r["predicted_verdict"]) != _walks(r["simulated_verdict"])]
     lines += ["", f"### Disagreements of the predicted verdict ({len(wrong)})", ""]
+    if wrong:
+        classes = Counter(cause_class(r) for r in wrong)
+        lines += [
+            "By measured cause: " + ", ".join(f"{k} {v}" for k, v in classes.most_common()),
+            "",
+        ]
     lines += [f"- {_label(r)}: {disagreement_cause(r)}" for r in wrong] or ["none"]
     return lines + [""]
 
@@ -194,12 +200,35 @@ def disagreement_cause(r) -> str:
     )
     support = f"unplanned support {r['unplanned_support_s']:.3f} s"
     rotation = f"predicted support rotation {r['predicted_rotation_deg']:.2f}°"
+    cause = f"**{cause_class(r)}**: "
     if _walks(r["predicted_verdict"]):
-        return f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
-    return (
+        return cause + f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
+    return cause + (
         f"predicted {r['predicted_verdict']} ({_events(r['predicted_events'])}; {rotation}), "
-        f"yet the robot walked; {plan}; {tracking}; {support}"
+        f"yet the robot walked ({_events(r['events'])}); {plan}; {tracking}; {support}"
     )
+
+
+def cause_class(r) -> str:
+    """Which measured mechanism a disagreement belongs to (results/README.md measures each).
+
+    * servo sway: plain ``servo``, predicted stable: the quasi-static compliance pass
+      holds (its margin stays positive) while the simulated servo sways and tips;
+    * floor give: the ZMP (planned, or of the reached walk) leaves the polygon and the
+      rigid-floor rotation stays under the tip angle, while the sole on MuJoCo's soft
+      floor turns past it;
+    * survived saturation: a servo asked for more than its limit, which the
+      simulation reports too (``torque_limit``), and the robot still walked;
+    * unexplained: none of these.
+    """
+    walks = _walks(r["predicted_verdict"])
+    if walks and r["actuators"] == "servo" and r["compliant_min_margin_mm"] > 0:
+        return "servo sway"
+    if walks and min(r["analytic_min_margin_mm"], r["compliant_min_margin_mm"]) < 0:
+        return "floor give"
+    if not walks and r["predicted_verdict"] == "saturation" and "torque_limit" in str(r["events"]):
+        return "survived saturation"
+    return "unexplained"
 
 
 def _events(text) -> str:

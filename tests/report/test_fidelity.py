@@ -35,6 +35,20 @@ def test_agreement_counts_walks_against_does_not():
     assert "### Disagreements of the predicted verdict (1)" in text
     assert "predicted stable, simulated tip (tip, first at 0.80 s)" in text
     assert "predicted support rotation 1.50°" in text  # the measured quantities, quoted
+    assert "**floor give**: predicted stable, simulated tip" in text
+
+
+def test_each_disagreement_gets_its_class():
+    from bench.report.fidelity import cause_class
+
+    sway = _row("stable", "stable", "fall", actuators="servo", compliant_min_margin_mm=3.3)
+    assert cause_class(sway) == "servo sway"
+    survived = _row("stable", "saturation", "stable", actuators="servo_ff", events="torque_limit")
+    assert cause_class(survived) == "survived saturation"
+    inside = _row(
+        "stable", "stable", "tip", analytic_min_margin_mm=2.0, compliant_min_margin_mm=1.0
+    )
+    assert cause_class(inside) == "unexplained"
 
 
 def test_the_goals_are_reported_where_the_table_has_their_cells():
