@@ -16,8 +16,9 @@ so they hold no copy of it).
 A file that is not such a table (binary, not UTF-8, no header, other columns,
 a line of the wrong width, a verdict that is not a verdict) is refused in one
 line naming the file and what is wrong; it is never truncated or overwritten.
-The one exception: a finished table of the previous version (its columns had
-a ``wall_s``), which a fresh run replaces (``--resume`` refuses it).
+The one exception: a finished table of an older version (``PREVIOUS_LAYOUTS``:
+its columns had a ``wall_s``, or lacked the fidelity columns), which a fresh run
+replaces (``--resume`` refuses it).
 
 Values, chosen so that regenerating a table from the same trials gives the
 same bytes: the inputs (``step_time``, ``slope_deg``, ``friction``) as written
@@ -115,6 +116,22 @@ _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the 
 # before fixed precision: a wall time, and no fidelity columns
 PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
 PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
+# every finished layout an older slopewalk wrote, which a fresh run may replace:
+# the one with a wall time, then fixed precision without the fidelity columns
+# (with and without the controller column)
+PREVIOUS_LAYOUTS = (
+    PREVIOUS_COLUMNS,
+    (*COLUMNS[:_FIDELITY], "error"),
+    (*COLUMNS[:_FIDELITY], "error", "controller"),
+)
+_PREVIOUS_HEADERS = {(",".join(c) + "\n").encode(): c for c in PREVIOUS_LAYOUTS}
+
+
+def _previous_layout(data: bytes) -> tuple[str, ...] | None:
+    """The older layout whose header ``data`` starts with, if any."""
+    return _PREVIOUS_HEADERS.get(data.split(b"\n", 1)[0] + b"\n")
+
+
 _ID_CHARS = frozenset("0123456789abcdef")
 
 
@@ -152,7 +169,7 @@ def parse(
         data: The file's contents.
         path: For messages.
         torn_ok: Accept a last line without its newline (left out of the rows).
-        previous_ok: Accept a table of ``PREVIOUS_COLUMNS`` too (checked the
+        previous_ok: Accept a table of ``PREVIOUS_LAYOUTS`` too (checked the
             same way), which a fresh run may replace; its rows are not returned.
         columns: The table's columns, ``COLUMNS`` or ``CONTROLLER_COLUMNS``.
 
@@ -167,8 +184,8 @@ def parse(
         raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
     expected, header = columns, (",".join(columns) + "\n").encode()
     other = CONTROLLER_HEADER if columns == COLUMNS else HEADER
-    if previous_ok and data.startswith(PREVIOUS_HEADER):
-        columns = PREVIOUS_COLUMNS
+    if previous_ok and _previous_layout(data):
+        columns = _previous_layout(data)
     elif data.startswith(other):
         raise SweepError(
             f"{where} for this sweep (its columns are those of a sweep "
@@ -179,9 +196,9 @@ def parse(
         what = (
             "no header line"
             if b"\n" not in data
-            else "written by an older slopewalk (it has a wall_s column): run without --resume "
-            "to replace it"
-            if data.startswith(PREVIOUS_HEADER)
+            else "written by an older slopewalk (its columns are another version's): run "
+            "without --resume to replace it"
+            if _previous_layout(data)
             else f"its header is not that of these {len(expected)} columns (another version?)"
             if first.startswith(b"trial_id,")
             else "its first line is not the header"

@@ -22,8 +22,7 @@ from bench.experiments.sweep_table import (
     CONTROLLER_COLUMNS,
     CONTROLLER_HEADER,
     HEADER,
-    PREVIOUS_COLUMNS,
-    PREVIOUS_HEADER,
+    PREVIOUS_LAYOUTS,
     format_row,
     parse,
 )
@@ -355,19 +354,20 @@ def test_a_table_that_is_not_a_sweep_table_is_refused_and_kept(
     assert [p.name for p in tmp_path.iterdir()] == [name] and (tmp_path / name).read_bytes() == data
 
 
-def test_a_table_of_the_previous_version_is_replaced_by_a_fresh_run_only(
-    tmp_path, capsys, reference
+@pytest.mark.parametrize("layout", PREVIOUS_LAYOUTS[:2], ids=["wall_s", "no_fidelity"])
+def test_a_table_of_a_previous_version_is_replaced_by_a_fresh_run_only(
+    tmp_path, capsys, reference, layout
 ):
     rows, data = reference
 
-    def previous(line: bytes) -> bytes:  # no fidelity columns, a wall time before the error
-        fields = next(csv.reader([line.decode()]))
-        kept = fields[: len(PREVIOUS_COLUMNS) - 2] + ["0.5", fields[-1]]
+    def previous(line: bytes) -> bytes:  # the older layout's columns, filled from a row
+        row = dict(zip(COLUMNS, next(csv.reader([line.decode()])), strict=True))
         buffer = io.StringIO()
-        csv.writer(buffer, lineterminator="\n").writerow(kept)
+        csv.writer(buffer, lineterminator="\n").writerow(row.get(c, "0.5") for c in layout)
         return buffer.getvalue().encode()
 
-    old = PREVIOUS_HEADER + b"".join(previous(line) for line in rows.values())
+    header = (",".join(layout) + "\n").encode()
+    old = header + b"".join(previous(line) for line in rows.values())
     (tmp_path / "sweep.csv").write_bytes(old)
     assert main(["sweep", str(SMOKE), "--out", str(tmp_path), "--resume"]) == 2
     assert "written by an older slopewalk" in capsys.readouterr().err
