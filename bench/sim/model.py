@@ -192,6 +192,7 @@ def scene_xml(
 
 
 _FLOOR_QUAT = re.compile(r'(<geom name="floor"[^>]*?) quat="[^"]*"')
+_FLOOR = re.compile(r'(<geom name="floor")')
 
 
 def _exact_floor(xml: str, slope: float) -> str:
@@ -203,9 +204,12 @@ def _exact_floor(xml: str, slope: float) -> str:
     """
     if slope == 0.0:
         return xml
-    exact, found = _FLOOR_QUAT.subn(rf'\1 euler="0 {-slope:.17g} 0"', xml, count=1)
+    euler = f'euler="0 {-slope:.17g} 0"'
+    exact, found = _FLOOR_QUAT.subn(rf"\1 {euler}", xml, count=1)
+    if found != 1:  # below ~1e-16 rad MuJoCo's writer takes the quaternion for the identity
+        exact, found = _FLOOR.subn(rf"\1 {euler}", xml, count=1)
     if found != 1:
-        raise SceneError("MuJoCo's writer changed: no quat on the floor geom to write exactly")
+        raise SceneError("MuJoCo's writer changed: no floor geom to write the slope on")
     return exact
 
 

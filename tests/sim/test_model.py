@@ -250,6 +250,14 @@ def test_bad_scene_options_are_refused_in_one_line(spec, options, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
+def test_a_tiny_slope_still_builds_and_is_written_exactly(spec):
+    """Below ~1e-16 rad MuJoCo's writer drops the floor's quat (identity); it was refused."""
+    slope = 1e-17  # [rad]
+    xml = scene_xml(spec, slope=slope)
+    assert f'euler="0 {-slope:.17g} 0"' in xml
+    mujoco.MjModel.from_xml_string(xml)
+
+
 def test_bad_stance_is_refused(spec):
     with pytest.raises(SceneError, match="stance 2"):
         stance_rooted_xml(spec, 2)
