@@ -19,14 +19,34 @@ from planner.trajectory import GaitParams
 
 
 def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
-    """2 s steps, stiff actuators: no events, simulated CoP within mm of the analytic ZMP."""
-    result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 2.0)))
+    """2 s steps, stiff actuators: no events, simulated CoP within mm of the analytic ZMP.
+
+    The distance has two parts (measured, MuJoCo 3.x, 1 ms step). Where the contacts
+    are those the plan assumes, 3.3 mm RMS: the stiff loop tracks to 6 mrad RMS
+    and the soft contact lets the soles sink and roll a little. In the last ~50 ms of
+    each SSP the swing foot touches down early (``tests/sim/test_simulated_forces.py``)
+    and the CoP jumps towards it, up to 60 mm away, in 4 % of the samples: 5.5 mm RMS
+    in all. Tolerances: 4 mm and 6 mm; 8 mm let a 40 % worse match pass.
+    """
+    gait = GaitParams.nominal(spec, 2.0)
+    plan = plan_walk(spec, gait)
+    result = run_trial(spec, TrialSpec(gait), plan=plan)
     print("\n".join(result.summary_lines()))
     assert result.analytic_verdict == "stable"
     assert result.simulated_verdict == "stable"
     assert [e.kind for e in result.events] == []
     assert result.standing_fraction == 1.0
-    assert result.zmp_rms < 0.008
+    series = result.series
+    idx = np.clip(np.searchsorted(plan.t, series["t"]), 0, plan.t.size - 1)
+    fz = series["foot_force"][..., 2]
+    on_swing = np.where(plan.stance[idx] == 0, fz[:, 1], fz[:, 0])
+    early = ~plan.double_support[idx] & (on_swing > 0.01 * spec.total_mass * 9.81)
+    distance = np.hypot(*(series["cop"] - series["zmp_analytic"]).T)
+    print(f"early-contact samples {early.mean():.1%}; RMS elsewhere "
+          f"{np.sqrt(np.mean(distance[~early] ** 2)) * 1e3:.2f} mm")  # fmt: skip
+    assert early.mean() < 0.05
+    assert np.sqrt(np.mean(distance[~early] ** 2)) < 0.004
+    assert result.zmp_rms < 0.006
 
 
 def test_fast_walk_falls_where_the_plan_leaves_the_foot(spec):
@@ -64,7 +84,13 @@ def _cli(*args):
     )
 
 
-def test_trial_cli_writes_json_and_series(tmp_path):
+def test_trial_cli_writes_json_and_series(spec, tmp_path):
+    """The CLI's numbers are those of ``run_trial`` on the trial its flags describe.
+
+    1 s steps on 10°, μ 0.6: the plan needs friction 0.26 and the simulation stays on
+    its feet, so both verdicts are stable; a CLI that dropped or mis-scaled a flag
+    (degrees as radians, the default μ) changes these values.
+    """
     out, series = tmp_path / "trial.json", tmp_path / "trial.npz"
     result = _cli(
         "trial",
@@ -84,8 +110,17 @@ def test_trial_cli_writes_json_and_series(tmp_path):
     assert result.returncode == 0, result.stderr
     data = json.loads(out.read_text())
     assert data["trial"]["gait"]["slope_deg"] == pytest.approx(10)
-    assert data["simulated_verdict"] in ("stable", "slip", "tip", "fall", "diverged")
-    assert np.load(series)["cop"].shape[1] == 2
+    gait = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2)
+    expected = run_trial(spec, TrialSpec(gait, friction=0.6))
+    assert (expected.analytic_verdict, expected.simulated_verdict) == ("stable", "stable")
+    assert not expected.slip_predicted
+    for key in ("analytic_verdict", "simulated_verdict", "slip_predicted"):
+        assert data[key] == getattr(expected, key), key
+    for key in ("zmp_rms", "zmp_max", "analytic_min_margin", "max_friction_ratio",
+                "simulated_max_friction_ratio", "tracking_rms"):  # fmt: skip
+        assert data[key] == pytest.approx(getattr(expected, key), rel=1e-6, abs=1e-9), key
+    cop = np.load(series)["cop"]
+    np.testing.assert_allclose(cop, expected.series["cop"], rtol=0, atol=1e-9)
 
 
 def test_spec_mujoco_refuses_is_one_line(tmp_path, spec):
