@@ -152,15 +152,39 @@ def test_recording_per_trial(tmp_path):
 
 
 def test_reference_run_is_complete(reference, tmp_path):
+    """Every row holds what ``run_trial`` gives for its trial, in the table's units.
+
+    The smoke cases' verdicts are part of the file's promise (stable and failing cases):
+    1 s flat stable in both views; 0.4 s leaves the foot and slips; the servo on 15°
+    falls; doubled leg masses leave the foot and tip.
+    """
+    from bench.sim.trial import run_trial
+
     rows, data = reference
     smoke = load_sweep(SMOKE)
     assert list(rows) == [t.trial_id for t in smoke.trials]  # written in file order
     assert data.startswith(HEADER)
-    for line in rows.values():
+    verdicts = []
+    for trial in smoke.trials:
+        line = rows[trial.trial_id]
         fields = dict(zip(COLUMNS, line.decode().rstrip("\n").split(","), strict=True))
-        assert fields["simulated_verdict"] in ("stable", "tip", "slip", "fall", "diverged")
+        result = run_trial(trial.spec, trial.trial_spec())
         assert fields["error"] == "" and float(fields["work_J"]) > 0
-        assert int(fields["sim_steps"]) > 0
+        assert fields["analytic_verdict"] == result.analytic_verdict
+        assert fields["simulated_verdict"] == result.simulated_verdict
+        # 4 decimals of a millimetre in the table
+        assert float(fields["zmp_rms_mm"]) == pytest.approx(result.zmp_rms * 1e3, abs=6e-5)
+        assert float(fields["analytic_min_margin_mm"]) == pytest.approx(
+            result.analytic_min_margin * 1e3, abs=6e-5
+        )
+        assert int(fields["sim_steps"]) == result.sim_steps
+        verdicts.append((fields["analytic_verdict"], fields["simulated_verdict"]))
+    assert verdicts == [
+        ("stable", "stable"),
+        ("zmp_outside", "slip"),
+        ("stable", "fall"),
+        ("zmp_outside", "tip"),
+    ]
 
 
 def test_a_fresh_run_plays_every_trial_and_writes_the_same_bytes(
