@@ -1,30 +1,57 @@
-"""The sweep's report: claims table, confusion table and figures, written whole."""
+"""The sweep's report: claims table, confusion table and figures, written whole and right.
 
+Each claim's numbers in ``claims.md`` are recomputed here from the primitives, outside
+``bench/report/claims.py``: MuJoCo's ``mj_inverse`` for the ZMP on slopes, the planner
+and a trial for margins and torques, the sweep table for the simulated cells.
+"""
+
+import csv
+import re
 import subprocess
 import sys
 from importlib import resources
 
+import numpy as np
+import pytest
+from mj_reference import StanceRootedInverse
 
-def test_sweep_report_writes_claims_and_figures(tmp_path):
+from bench.sim.trial import TrialSpec, run_trial
+from planner.kinematics import gravity_in_slope
+from planner.plan import plan_walk
+from planner.trajectory import GaitParams
+from planner.zmp import cop_of_wrench, signed_margin
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    """The smoke sweep with --report: (output dir, {claim: cells}, sweep rows)."""
+    out = tmp_path_factory.mktemp("report")
     smoke = resources.files("bench.experiments") / "sweeps" / "smoke.toml"
     result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "bench.cli",
-            "sweep",
-            str(smoke),
-            "--workers",
-            "1",
-            "--report",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+        [sys.executable, "-m", "bench.cli", "sweep", str(smoke), "--workers", "1", "--report",
+         "--out", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
     assert result.returncode == 0, result.stderr
+    lines = (out / "claims.md").read_text().splitlines()
+    rows = [line for line in lines if line.startswith("| ") and "---" not in line]
+    cells = [[c.strip() for c in line.strip("|").split("|")] for line in rows[1:]]
+    with open(out / "sweep.csv", newline="") as f:
+        table = list(csv.DictReader(f))
+    return out, {c[0]: c[1:] for c in cells}, rows, table
+
+
+def _numbers(text: str) -> list[float]:
+    return [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?", text)]
+
+
+def _claim(claims, start: str) -> list[str]:
+    (key,) = [k for k in claims if k.startswith(start)]
+    return claims[key]
+
+
+def test_sweep_report_writes_claims_and_figures(report):
+    out, _, rows, _ = report
     for name in (
         "claims.md",
         "confusion.md",
@@ -34,12 +61,81 @@ def test_sweep_report_writes_claims_and_figures(tmp_path):
         "joint_angles.png",
         "lipm_vs_step_time.png",
     ):
-        assert (tmp_path / name).stat().st_size > 0, name
-    claims = (tmp_path / "claims.md").read_text().splitlines()
-    rows = [line for line in claims if line.startswith("| ") and "---" not in line]
+        assert (out / name).stat().st_size > 0, name
     assert len(rows) >= 7  # header + one row per claim
     assert all(line.count("|") == 7 for line in rows)  # no stray '|' inside a cell
-    assert not list(tmp_path.glob("*.part"))
+    assert not list(out.glob("*.part"))
+
+
+def test_slope_claim_zmp_positions_are_mujocos(spec, report):
+    """Mean SSP ZMP x from the stance ankle, per slope: the CoP of mj_inverse's ground wrench."""
+    _, claims, _, _ = report
+    analytic = _claim(claims, "slopes:")[1]
+    stated = dict(re.findall(r"([\d.]+)°: ([-+]\d+\.\d)", analytic))
+    assert set(stated) == {"0", "15", "18", "22.5"}
+    for slope_deg, value in stated.items():
+        slope = np.deg2rad(float(slope_deg))
+        plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=slope))
+        mj = StanceRootedInverse(spec, gravity_in_slope(slope))
+        ssp = np.flatnonzero(~plan.double_support)
+        x = []
+        for k in ssp:
+            ref = mj(plan.q[k], plan.qd[k], plan.qdd[k], plan.stance[k], plan.stance_sole[k])
+            cop = cop_of_wrench(ref.force[None], ref.moment[None], plan.stance_sole[k][None])
+            x.append(cop[0, 0] - plan.stance_sole[k, 0])
+        assert float(value) == pytest.approx(np.mean(x) * 1e3, abs=0.051), slope_deg
+
+
+def test_mass_claims(spec, report):
+    _, claims, _, table = report
+    nominal = plan_walk(spec, GaitParams.nominal(spec, 1.0))
+    # 10x every mass and inertia: the ZMP is invariant (every term of eq. 4 scales alike)
+    shift, margin, base = _numbers(_claim(claims, "10×")[1])[-3:]
+    assert shift < 1e-6
+    assert base == pytest.approx(nominal.margin.min() * 1e3, abs=0.051)
+    assert margin == pytest.approx(base, abs=1e-9)
+    # doubled legs: recomputed from the scaled spec
+    cells = _claim(claims, "doubling")
+    heavy = plan_walk(spec.with_mass_scale({"legs": 2.0}), nominal.params)
+    shift, margin, base = _numbers(cells[1])[-3:]
+    assert shift == pytest.approx(np.hypot(*(heavy.zmp - nominal.zmp).T).max() * 1e3, abs=0.051)
+    assert margin == pytest.approx(heavy.margin.min() * 1e3, abs=0.051)
+    assert margin < 0 < base
+    (row,) = [r for r in table if r["mass_scale"] == "legs=2"]
+    assert cells[2].startswith(f"{row['simulated_verdict']} (μ 1, RMS ")
+    assert _numbers(cells[2])[1] == pytest.approx(float(row["zmp_rms_mm"]), abs=0.051)
+
+
+def test_lipm_claim_margins_at_fast_steps(spec, report):
+    _, claims, _, _ = report
+    lipm, multibody = _numbers(_claim(claims, "LIPM")[1].split("at 0.4 s")[1])[-2:]
+    fast = plan_walk(spec, GaitParams.nominal(spec, 0.4))
+    assert multibody == pytest.approx(fast.margin.min() * 1e3, abs=0.51)
+    assert lipm == pytest.approx(signed_margin(fast.zmp_lipm, fast.polygon).min() * 1e3, abs=0.51)
+    assert lipm > multibody  # the LIPM sees less of the trouble
+
+
+def test_torque_claim_stance_and_swing(spec, report):
+    """Peaks and RMS of stance vs swing joints, planned and simulated (MJCF order remapped)."""
+    _, claims, _, _ = report
+    cells = _claim(claims, "stance joints")
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0))
+    result = run_trial(spec, TrialSpec(plan.params), plan=plan)
+
+    def figures(stance, swing):
+        rms = [float(np.sqrt(np.mean(x**2, axis=0)).mean()) for x in (stance, swing)]
+        return [stance.max(axis=0).mean(), swing.max(axis=0).mean(), *rms]
+
+    tau = np.abs(plan.tau)
+    np.testing.assert_allclose(
+        _numbers(cells[1])[:4], figures(tau[:, :4], tau[:, 4:]), rtol=0, atol=6e-4
+    )
+    sim = np.abs(result.series["actuator_force"])  # left hip..roll, right hip..roll
+    idx = np.clip(np.searchsorted(plan.t, result.series["t"]), 0, plan.t.size - 1)
+    right = plan.stance[idx] == 1
+    stance = np.where(right[:, None], sim[:, 4:], sim[:, :4])
+    swing = np.where(right[:, None], sim[:, :4], sim[:, 4:])
+    np.testing.assert_allclose(_numbers(cells[2])[:4], figures(stance, swing), rtol=0, atol=6e-4)
 
 
 def test_a_zero_zmp_shift_is_written_as_zero_whatever_the_rounding_noise(spec):
