@@ -43,6 +43,19 @@ def test_plan_writes_the_series(tmp_path):
     meta = json.loads(str(data["meta"]))
     assert meta["params"]["slope"] == pytest.approx(np.deg2rad(10))
     assert meta["spec"]["thigh"] == 0.111
+    # the values are those of the plan the flags describe (degrees at the edge only)
+    from planner.plan import plan_walk
+    from planner.spec import load_spec
+    from planner.trajectory import GaitParams
+
+    spec = load_spec()
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))
+    for key in ("t", "q", "qd", "tau", "zmp", "zmp_lipm", "cop_ne", "com", "stance", "margin"):
+        np.testing.assert_allclose(data[key], getattr(plan, key), rtol=0, atol=1e-12, err_msg=key)
+    np.testing.assert_array_equal(data["q_left_right"], plan.q_left_right)
+    assert meta["summary"]["min_margin_m"] == pytest.approx(plan.margin.min(), abs=1e-12)
+    assert f"verdict: {'stable' if plan.stable else 'zmp_outside'} " in result.stdout
+    assert f"min ZMP margin {plan.margin.min() * 1e3:.2f} mm" in result.stdout
 
 
 def test_planner_never_imports_mujoco():
