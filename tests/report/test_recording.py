@@ -10,7 +10,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 import bench.report.recording
-from bench.report.recording import LIFT, RecordingError, record_trial
+from bench.report.recording import FORCE_SCALE, FRAME_RATE, LIFT, RecordingError, record_trial
 from bench.sim.playback import build_model, play
 from bench.sim.trial import TrialSpec, run_trial
 from planner.joints import MJCF_JOINTS
@@ -57,6 +57,11 @@ def test_the_file_holds_every_entity(walk):
     path, _, _, wall_s = walk
     print(f"\n{path.stat().st_size / 1e6:.2f} MB in {wall_s:.3f} s")
     assert 10_000 < path.stat().st_size < 5_000_000
+    # the robot at FRAME_RATE over the whole walk, the last sample kept
+    t = np.asarray(walk[2].series["t"])
+    times = chunks(path)[("/world/robot/pelvis", False)]["time"]
+    assert len(times) == t.size // round(1 / (FRAME_RATE * np.median(np.diff(t)))) + 1
+    assert times[-1] == pytest.approx(t[-1], abs=2e-9)
     assert [p.name for p in path.parent.iterdir()] == ["trial.rrd"]  # no temporary left
     found = {
         (entity, column.split(":")[0])
@@ -86,6 +91,53 @@ def test_the_file_holds_every_entity(walk):
     }
     expected |= {(f"/zmp/{a}/{k}", "Scalars") for a in "xy" for k in ("analytic", "simulated")}
     assert expected <= found, expected - found
+
+
+def _scalars(column) -> np.ndarray:
+    return np.array([v[0] for v in column["Scalars:scalars"]])
+
+
+def test_plots_polygon_and_forces_hold_the_trials_values(walk):
+    """Every plotted value is the trial's, in the units and frame the recording promises."""
+    path, plan, result, _ = walk
+    data, series = chunks(path), result.series
+    t = np.asarray(series["t"])
+    R = rotation_slope_to_world(plan.params.slope)
+    for j, joint in enumerate(MJCF_JOINTS):  # degrees, every sample
+        for name, key in (("planned", "q_planned"), ("actual", "q_simulated")):
+            column = data[(f"/joints/{joint}/{name}", False)]
+            np.testing.assert_allclose(column["time"], t, rtol=0, atol=2e-9)
+            np.testing.assert_allclose(_scalars(column), np.rad2deg(series[key][:, j]), rtol=1e-12)
+    for a, axis in enumerate("xy"):  # millimetres in S, NaN samples left out
+        for name, key in (("analytic", "zmp_analytic"), ("simulated", "cop")):
+            values = 1e3 * np.asarray(series[key])[:, a]
+            ok = np.isfinite(values)
+            column = data[(f"/zmp/{axis}/{name}", False)]
+            np.testing.assert_allclose(column["time"], t[ok], rtol=0, atol=2e-9)
+            np.testing.assert_allclose(_scalars(column), values[ok], rtol=1e-12)
+    polygon = data[("/world/support_polygon", False)]
+    for time_s, (strip,) in zip(polygon["time"], polygon["LineStrips3D:strips"], strict=True):
+        sample = t[np.argmin(abs(t - time_s))]  # the trial's time, then the plan's sample
+        k = min(np.searchsorted(plan.t, sample), plan.t.size - 1)
+        closed = np.concatenate([plan.polygon[k], plan.polygon[k][:1]])
+        expected = np.column_stack([closed, np.full(len(closed), LIFT)]) @ R.T
+        np.testing.assert_allclose(strip, expected, rtol=0, atol=1e-6)
+    for f, foot in enumerate(("left", "right")):  # arrows: world force × scale, from the CoP
+        column = data[(f"/world/contact_force/{foot}", False)]
+        rows = zip(
+            column["time"], column["Arrows3D:vectors"], column["Arrows3D:origins"], strict=True
+        )
+        drawn = 0
+        for time_s, vectors, origins in rows:
+            k = int(np.argmin(abs(t - time_s)))
+            cop, force = series["foot_cop"][k, f], series["foot_force"][k, f]
+            if not vectors:
+                assert not np.isfinite(cop).all()
+                continue
+            drawn += 1
+            np.testing.assert_allclose(vectors[0], R @ force * FORCE_SCALE, rtol=0, atol=1e-6)
+            np.testing.assert_allclose(origins[0], R @ [*cop, LIFT], rtol=0, atol=1e-6)
+        assert drawn > 10
 
 
 def test_the_robot_in_the_file_is_mujocos(walk):
