@@ -31,12 +31,16 @@ class InverseResult:
         force: Ground force on the stance foot [N], (3,).
         moment: Ground moment on the stance foot about its sole point [N m], (3,).
         swing_sole: Swing sole point (under the swing ankle) [m], (3,).
+        omega, omega_dot: Angular velocity [rad/s] and acceleration [rad/s²] of the 9
+            chain links (stance foot … swing foot, ``kinematics.CHAIN_LINKS``), (9, 3).
     """
 
     tau: np.ndarray
     force: np.ndarray
     moment: np.ndarray
     swing_sole: np.ndarray
+    omega: np.ndarray
+    omega_dot: np.ndarray
 
 
 class StanceRootedInverse:
@@ -71,6 +75,12 @@ class StanceRootedInverse:
         data.qacc[:] = 0
         data.qvel[hinges], data.qacc[hinges] = qd, qdd
         mujoco.mj_inverse(model, data)
+        mujoco.mj_rnePostConstraint(model, data)  # cacc: body accelerations
+        st, sw = SIDE_PREFIX[stance], SIDE_PREFIX[1 - stance]
+        links = [st + "foot", st + "ankle", st + "shank", st + "thigh", "pelvis",
+                 sw + "thigh", sw + "shank", sw + "ankle", sw + "foot"]  # fmt: skip
+        ids = [model.body(name).id for name in links]
+        omega, omega_dot = data.cvel[ids, :3].copy(), data.cacc[ids, :3].copy()  # world = S
         qfrc = data.qfrc_inverse.copy()
         R_swing = data.xmat[swing_foot].reshape(3, 3)
         swing_sole = data.xpos[swing_foot] - self.spec.ankle_height * R_swing[:, 2]
@@ -84,4 +94,4 @@ class StanceRootedInverse:
         force = qfrc[:3]
         moment_ankle = data.xmat[stance_foot].reshape(3, 3) @ qfrc[3:6]
         moment = moment_ankle + np.cross(data.xpos[stance_foot] - sole, force)
-        return InverseResult(qfrc[hinges], force, moment, swing_sole)
+        return InverseResult(qfrc[hinges], force, moment, swing_sole, omega, omega_dot)

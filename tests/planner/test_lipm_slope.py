@@ -60,3 +60,20 @@ def test_lipm_matches_the_multibody_zmp_on_a_slope_at_slow_steps(spec, slope_deg
     assert rms < 2e-3
     shift = plan.com[:, 0] - plan.zmp_lipm[:, 0]  # CoM ahead of the ZMP uphill, behind downhill
     assert np.sign(np.median(shift)) == np.sign(slope_deg)
+
+
+def test_cop_and_friction_ratio_of_light_and_vanishing_normal_forces():
+    """A light foot still has a CoP and a ratio; no normal force has neither (NaN, inf)."""
+    from planner.zmp import cop_of_wrench, friction_ratio
+
+    force = np.array([[0.03, -0.04, 0.5], [0.1, 0.0, 0.0], [0.1, 0.0, -0.2]])  # [N]
+    moment = np.array([[0.01, -0.02, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # [N m]
+    point = np.array([[0.1, 0.2, 0.0]] * 3)
+    cop = cop_of_wrench(force, moment, point)
+    # about the origin M0 = M + p × F; the CoP is (−M0_y, M0_x) / F_z
+    m0 = moment[0] + np.cross(point[0], force[0])
+    np.testing.assert_allclose(cop[0], [-m0[1] / 0.5, m0[0] / 0.5], rtol=1e-12)
+    assert np.isnan(cop[1:]).all()
+    ratio = friction_ratio(force)
+    assert ratio[0] == pytest.approx(0.05 / 0.5, rel=1e-12)
+    assert np.isinf(ratio[1:]).all()

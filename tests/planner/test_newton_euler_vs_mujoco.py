@@ -34,7 +34,8 @@ def _compare(spec, slope, q, qd, qdd, stance, sole):
     frames = chain.frames(q[None], sole[None], np.array([stance]))
     dyn = inverse_dynamics(chain, frames, qd[None], qdd[None], np.array([stance]), g)
     mj = StanceRootedInverse(spec, g)(q, qd, qdd, stance, sole)
-    return (dyn.tau[0], dyn.stance_force[0], dyn.stance_moment[0]), (mj.tau, mj.force, mj.moment)
+    ours = (dyn.tau[0], dyn.stance_force[0], dyn.stance_moment[0], dyn.omega[0], dyn.omega_dot[0])
+    return ours, (mj.tau, mj.force, mj.moment, mj.omega, mj.omega_dot)
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)
@@ -47,12 +48,12 @@ def _compare(spec, slope, q, qd, qdd, stance, sole):
     sole=hnp.arrays(np.float64, 2, elements=st.floats(-0.3, 0.3)),
 )
 def test_random_states_match_mj_inverse(spec, slope, stance, q, qd, qdd, sole):
-    """Every joint moving, both stance legs, slopes to ±52°: torques and ground wrench."""
+    """Every joint moving, both stance legs, slopes to ±52°: torques, ground wrench, link spin."""
     sole3 = np.array([*sole, 0.0])
     ours, mj = _compare(
         spec, slope, ANGLE_MID + ANGLE * q, RATE * qd, ACCELERATION * qdd, stance, sole3
     )
-    for name, a, b in zip(("tau", "force", "moment"), ours, mj, strict=True):
+    for name, a, b in zip(("tau", "force", "moment", "omega", "omega_dot"), ours, mj, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-9, err_msg=name)
 
 

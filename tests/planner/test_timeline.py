@@ -38,6 +38,10 @@ def test_default_walk_has_the_promised_timeline(spec, step_time, slope_deg, prof
     assert len(ssp) == DEFAULT_STEPS  # one single support per step
     assert len(dsp) == DEFAULT_STEPS + 1  # one per step, and the closing one
     assert plan.t[-1] == pytest.approx((DEFAULT_STEPS + DSP_SHARE) * T, abs=1e-9)
+    np.testing.assert_allclose(np.diff(plan.t), dt, rtol=1e-9)  # sampled at dt throughout
+    # at the start the feet stand under the hips, the right one at -Lh/2 (pelvis at y = 0)
+    np.testing.assert_allclose(plan.stance_sole[0, 1], -spec.hip_width / 2, atol=1e-12)
+    np.testing.assert_allclose(plan.swing_sole[0, 1], spec.hip_width / 2, atol=1e-9)
     # phase durations, to one sample: the flags change at the sample after the boundary
     for a, b in ssp:
         assert plan.t[b] - plan.t[a] + dt == pytest.approx(SSP_SHARE * T, abs=1.01 * dt)
