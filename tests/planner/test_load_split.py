@@ -31,7 +31,8 @@ CASES = [  # step time [s], slope [deg], tilt profile, steps
 ]
 
 
-@pytest.fixture(scope="module", params=CASES, ids=lambda c: f"T{c[0]}-{c[1]}deg-{c[2]}-N{c[3]}")
+# per test, not per module: mutmut maps each test to the code its fixtures run
+@pytest.fixture(params=CASES, ids=lambda c: f"T{c[0]}-{c[1]}deg-{c[2]}-N{c[3]}")
 def walk(spec, request):
     step_time, slope_deg, profile, steps = request.param
     params = GaitParams.nominal(

@@ -80,7 +80,7 @@ def test_pure_roll_rate_exercises_the_gyroscopic_terms(spec):
         np.testing.assert_allclose(dyn.stance_moment[0], mj.moment, rtol=1e-7, atol=1e-9)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
 def sway_walk(spec):
     """A 0.6 s-step walk on 10° with the ``sway`` tilt: the legs roll through every phase."""
     params = GaitParams.nominal(spec, 0.6, slope=np.deg2rad(10.0), tilt_profile="sway")

@@ -16,7 +16,7 @@ from planner.plan import plan_walk
 from planner.trajectory import GaitParams
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
 def model(spec):
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
     return build_model(plan, friction=1.0, actuators="stiff", timestep=0.001)

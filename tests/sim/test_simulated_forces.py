@@ -25,7 +25,7 @@ from planner.zmp import signed_margin
 G = 9.81
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
 def slope_walk(spec):
     """Two 1 s steps on 10°, stiff actuators (stable): (plan, result)."""
     gait = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2)
@@ -34,7 +34,7 @@ def slope_walk(spec):
     return plan_walk(spec, gait), result
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
 def flat_walk(spec):
     """The slow flat walk of the README: 4 steps of 2 s."""
     gait = GaitParams.nominal(spec, 2.0)

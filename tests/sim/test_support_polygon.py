@@ -53,7 +53,7 @@ def _hull_margin(point, corners) -> float:
     return distance if inside else -distance
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
 def walk(spec):
     return plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))
 
