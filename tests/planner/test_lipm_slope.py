@@ -67,7 +67,7 @@ def test_cop_and_friction_ratio_of_light_and_vanishing_normal_forces():
     from planner.zmp import cop_of_wrench, friction_ratio
 
     force = np.array([[0.03, -0.04, 0.5], [0.1, 0.0, 0.0], [0.1, 0.0, -0.2]])  # [N]
-    moment = np.array([[0.01, -0.02, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # [N m]
+    moment = np.array([[0.01, -0.02, 0.0], [0.01, 0.02, 0.0], [0.0, 0.0, 0.0]])  # [N m]
     point = np.array([[0.1, 0.2, 0.0]] * 3)
     cop = cop_of_wrench(force, moment, point)
     # about the origin M0 = M + p × F; the CoP is (−M0_y, M0_x) / F_z

@@ -14,7 +14,7 @@ import pytest
 from planner.joints import LEFT, RIGHT
 from planner.kinematics import Chain
 from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from planner.trajectory import GaitParams, Timeline, footprint_y
 
 DEFAULT_STEPS = 4  # README: `--steps N`, CLI help "(4)"; docs/sweep-format.md: default 4
 DSP_SHARE, SSP_SHARE = 0.4, 0.6  # README: "each step is a DSP (40 %) then an SSP (60 %)"
@@ -89,3 +89,21 @@ def test_distance_walked_and_rest_at_both_ends(spec, steps):
     dt = params.dt
     for v in (com[1] - com[0], com[-1] - com[-2]):
         assert np.abs(v / dt).max() < 0.02 * L / params.step_time  # [m/s], a sliver of walking
+
+
+def test_lateral_footprints_by_hand_for_one_robot_and_a_population(spec):
+    """Feet land Lh / cos λ apart (legs parallel, no hip roll); a population row by row.
+
+    Hold profile: the lean at each touch-down is ±tilt, so for three steps the right foot
+    starts at −Lh/2, the left lands at −Lh/2 + Lh / cos(tilt), the right back at −Lh/2.
+    """
+    Lh = spec.hip_width
+    timeline = Timeline.of(GaitParams.nominal(spec, 0.8, steps=3))
+    tilts = np.array([0.14, 0.2, 0.05])  # [rad]
+    for tilt in tilts:
+        expected = [-Lh / 2, -Lh / 2 + Lh / np.cos(tilt), -Lh / 2]
+        np.testing.assert_allclose(footprint_y(timeline, Lh, tilt), expected, atol=1e-12)
+    rows = footprint_y(timeline, Lh, tilts)
+    assert rows.shape == (3, 3)
+    for k, tilt in enumerate(tilts):
+        np.testing.assert_allclose(rows[k], footprint_y(timeline, Lh, tilt), atol=1e-15)

@@ -39,7 +39,7 @@ def test_cop_of_hand_written_contacts_on_a_slope(model):
     slope = np.deg2rad(12.0)
     R = rotation_slope_to_world(slope)
     in_world = R @ np.array([[0.1, 0.02, 0.0], [0.14, 0.03, 0.0], [0.05, -0.05, 0.0]]).T
-    rows = np.zeros((2, model.nsensordata))
+    rows = np.zeros((3, model.nsensordata))
     # row 0: left foot two contacts (3 N, 1 N), right foot a light 0.5 N one; an empty
     # slot with leftover numbers but found = 0, which must be ignored
     left = _contacts([[1, 3.0, 0, 0, *in_world[:, 0]], [1, 1.0, 0, 0, *in_world[:, 1]],
@@ -50,7 +50,8 @@ def test_cop_of_hand_written_contacts_on_a_slope(model):
     _put(model, rows[0], "l_foot_net", -(R @ [0.0, 0.0, 4.0]))  # foot on floor, world
     _put(model, rows[0], "r_foot_net", -(R @ [0.1, 0.0, 0.5]))
     _put(model, rows[0], f"{NON_FOOT_BODIES[2]}_touch", [1.0])
-    # row 1: nothing touches
+    # row 1: nothing touches; row 2: only a light 0.5 N contact under the right foot
+    _put(model, rows[2], "r_foot_contacts", right)
     s = decode(model, rows, R)
     np.testing.assert_allclose(s.foot_cop[0, 0], [(3 * 0.1 + 0.14) / 4, (3 * 0.02 + 0.03) / 4])
     np.testing.assert_allclose(s.foot_cop[0, 1], [0.05, -0.05], atol=1e-12)
@@ -59,4 +60,7 @@ def test_cop_of_hand_written_contacts_on_a_slope(model):
     )
     np.testing.assert_allclose(s.foot_force[0], [[0, 0, 4.0], [0.1, 0, 0.5]], atol=1e-12)
     assert np.isnan(s.foot_cop[1]).all() and np.isnan(s.cop[1]).all()
-    assert s.touching.tolist() == [True, False]
+    assert np.isnan(s.foot_cop[2, 0]).all()
+    np.testing.assert_allclose(s.foot_cop[2, 1], [0.05, -0.05], atol=1e-12)
+    np.testing.assert_allclose(s.cop[2], [0.05, -0.05], atol=1e-12)  # a light load has a CoP
+    assert s.touching.tolist() == [True, False, False]

@@ -120,6 +120,27 @@ def test_falls_by_touch_and_by_pelvis_height():
     assert verdict(events) == "fall"
 
 
+def test_causes_print_millimetres():
+    """The numbers in the cause lines are the series' values in mm, rounded as printed."""
+    base = _standing()
+    sole, height = base["sole"].copy(), base["pelvis_height"].copy()
+    sole[300:, 0, 0] += 0.005049  # left foot jumps 5.049 mm while loaded
+    hip = 0.2004  # [m] planned; the fall line is at 120.24 mm
+    height[600:] = 0.11945
+    recording = Recording(
+        t=np.arange(N) * DT,
+        q_ref=np.zeros((N, 8)),
+        sensors=TrialSensors(**_standing(sole=sole, pelvis_height=height)),
+        force_limit=LIMIT,
+        diverged_at=None,
+    )
+    events = detect(recording, weight=WEIGHT, hip_height=hip)
+    assert [e.cause for e in events] == [
+        "left foot slid 5.0 mm on the plane while loaded",
+        "pelvis at 119 mm above the plane (planned 200 mm)",
+    ]
+
+
 def test_a_saturated_actuator_is_reported_once_and_leaves_the_verdict_alone():
     force = np.zeros((N, 8))
     force[:, 5] = -_ramp(0, 400, 3.1).clip(0, LIMIT)  # r_knee: 0.99 of the limit at 191.6
