@@ -7,17 +7,8 @@ flat batch of P·n samples, one module per concept (``trajectory``, ``ik``,
 ``plan.evaluate`` run the kernel; nothing but the tests and the benchmark's
 ``numpy_evals_per_s`` runs this.
 
-Double-support load split (stated assumption): during each DSP the ground
-wrench moves from the foot that was loaded to the foot that will be, along a
-smoothstep s(t) = 3x² − 2x³ of the phase x ∈ [0, 1]. Each foot carries a scaled
-copy of the total wrench (share s for the new stance foot, 1 − s for the other),
-so both see the same CoP and the torques are continuous at every phase change.
-The walk starts with the load shared equally (s: ½ → 1 in the first DSP) and the
-closing DSP returns to equal shares (1 → ½). The ZMP does not depend on the split.
-
-Joint work (eq. 7): the paper writes Σ∫ τ θ̇ dt, which over a step is only the
-change of mechanical energy (zero for a periodic gait). We report the energy the
-actuators spend, Σ∫ |τ θ̇| dt, per joint and in total.
+The stated modelling choices (double-support load split, joint work) are
+those of ``planner.plan``'s module docstring; this path implements the same.
 """
 
 from __future__ import annotations

@@ -1,3 +1,6 @@
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -37,3 +40,20 @@ def away_from_phase_changes(plan, margin: int = 3) -> np.ndarray:
     for offset in range(-margin + 1, margin + 1):
         keep[np.clip(change + offset, 0, plan.t.size - 1)] = False
     return keep
+
+
+def session_pids(sid: int) -> list[int]:
+    """Pids of the live processes of session ``sid`` (a run started in its own session).
+
+    Tests that kill a sweep check with it that no worker outlived its parent.
+    """
+    out = []
+    for name in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            stat = Path(f"/proc/{name}/stat").read_text()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2 :].split()  # state ppid pgrp session ...
+        if int(fields[3]) == sid and fields[0] != "Z":
+            out.append(int(name))
+    return out

@@ -11,6 +11,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
+from conftest import session_pids
 
 from bench.experiments.executor import (
     FuturesPool,
@@ -136,29 +137,18 @@ def test_busy_workers_die_with_their_killed_parent(tmp_path):
     try:
         assert proc.stdout.readline() == "running\n"
         deadline = time.monotonic() + 30
-        while len(_session(proc.pid)) < 4 and time.monotonic() < deadline:  # parent, 2 + tracker
+        # the parent, its 2 workers and the resource tracker
+        while (
+            len(session_pids(proc.pid)) < 4 and time.monotonic() < deadline
+        ):  # parent, 2 + tracker
             time.sleep(0.05)
         time.sleep(1.0)  # the workers are asleep in their 60 s jobs
         proc.kill()
         proc.wait()
         deadline = time.monotonic() + 3
-        while _session(proc.pid) and time.monotonic() < deadline:
+        while session_pids(proc.pid) and time.monotonic() < deadline:
             time.sleep(0.05)
-        assert _session(proc.pid) == [], "workers outlived their parent"
+        assert session_pids(proc.pid) == [], "workers outlived their parent"
     finally:
-        for pid in _session(proc.pid):
+        for pid in session_pids(proc.pid):
             os.kill(pid, signal.SIGKILL)
-
-
-def _session(sid: int) -> list[int]:
-    """Pids of the live processes of session ``sid``."""
-    out = []
-    for name in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            stat = open(f"/proc/{name}/stat").read()
-        except OSError:
-            continue
-        fields = stat[stat.rindex(")") + 2 :].split()  # state ppid pgrp session ...
-        if int(fields[3]) == sid and fields[0] != "Z":
-            out.append(int(name))
-    return out

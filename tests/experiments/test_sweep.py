@@ -13,6 +13,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import pytest
+from conftest import session_pids
 
 from bench.cli import main
 from bench.experiments.sweep import SweepSummary, run_one, run_sweep
@@ -46,25 +47,10 @@ def _rows_in(path: Path) -> int:
         return 0
 
 
-def _session(sid: int) -> list[int]:
-    """Pids of the live processes of session ``sid`` (a run started in its own session)."""
-    out = []
-    for name in os.listdir("/proc"):
-        if name.isdigit():
-            try:
-                stat = Path(f"/proc/{name}/stat").read_text()
-            except OSError:
-                continue
-            fields = stat[stat.rindex(")") + 2 :].split()  # state ppid pgrp session ...
-            if int(fields[3]) == sid and fields[0] != "Z":
-                out.append(int(name))
-    return out
-
-
 def _gone(sid: int, within: float = 5.0) -> list[int]:
     """The processes of session ``sid`` still alive after ``within`` seconds (none, we hope)."""
     deadline = time.monotonic() + within
-    while (left := _session(sid)) and time.monotonic() < deadline:
+    while (left := session_pids(sid)) and time.monotonic() < deadline:
         time.sleep(0.05)
     return left
 
