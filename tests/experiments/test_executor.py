@@ -138,9 +138,7 @@ def test_busy_workers_die_with_their_killed_parent(tmp_path):
         assert proc.stdout.readline() == "running\n"
         deadline = time.monotonic() + 30
         # the parent, its 2 workers and the resource tracker
-        while (
-            len(session_pids(proc.pid)) < 4 and time.monotonic() < deadline
-        ):  # parent, 2 + tracker
+        while len(session_pids(proc.pid)) < 4 and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(1.0)  # the workers are asleep in their 60 s jobs
         proc.kill()
