@@ -25,6 +25,9 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
 * selection: binary tournament on (constraint violation, objective); survival:
   pymoo's (μ + λ) truncation of parents and children, which is stronger elitism
   than MATLAB's 5 % elite count. Duplicates are eliminated (and re-mated).
+  The GA runs with ``ga_operators``' array versions of pymoo's tournament,
+  survival and duplicate test: the same comparisons and random draws, without
+  pymoo's per-individual Python.
 * seed → ``seed=`` of the algorithm: pymoo 0.6 draws every random number from
   one ``numpy.random.Generator`` seeded with it, and the planner is
   deterministic, so a seed fixes the run bit for bit.
@@ -37,12 +40,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pymoo.algorithms.moo.nsga2 import NSGA2
-from pymoo.algorithms.soo.nonconvex.ga import GA
 from pymoo.core.problem import Problem
 from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
 from tqdm import tqdm
 
+from bench.experiments.ga_operators import ArrayDuplicates, ArrayGA
 from planner.errors import SlopewalkError
 from planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
 
@@ -93,7 +96,7 @@ class GaSettings:
             "n_offsprings": self.population,
             "crossover": SBX(prob=self.crossover),
             "mutation": PM(prob=1.0, prob_var=self.mutation),
-            "eliminate_duplicates": True,
+            "eliminate_duplicates": ArrayDuplicates(),
         }
 
 
@@ -226,13 +229,16 @@ def _drive(algorithm, pymoo_problem, settings: GaSettings, progress: bool, label
     """Run ``algorithm`` for the settings' generations; returns (wall_s, batch sizes)."""
     algorithm.setup(pymoo_problem, termination=("n_gen", settings.generations), seed=settings.seed)
     batches = []
+    log = pymoo_problem.log.F
     start = time.perf_counter()
     with tqdm(total=settings.generations, desc=label, unit="gen", disable=not progress) as bar:
         while algorithm.has_next():
-            before = sum(len(x) for x in pymoo_problem.log.F)
+            before = len(log)
             algorithm.next()
-            batches.append(sum(len(x) for x in pymoo_problem.log.F) - before)
+            batches.append(sum(len(x) for x in log[before:]))
             bar.update(1)
+    if hasattr(algorithm, "finish"):
+        algorithm.finish()
     return time.perf_counter() - start, batches
 
 
@@ -244,7 +250,7 @@ def run_ga(problem, settings: GaSettings, *, progress: bool = False) -> RunResul
         progress: Show a tqdm bar (one tick per generation) on stderr.
     """
     pymoo_problem = _PymooProblem(problem, settings.constraint)
-    algorithm = GA(**settings.operators())
+    algorithm = ArrayGA(**settings.operators())
     wall_s, batches = _drive(algorithm, pymoo_problem, settings, progress, "GA")
     return _result(pymoo_problem.log, wall_s, batches)
 

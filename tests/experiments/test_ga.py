@@ -7,8 +7,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from pymoo.algorithms.moo.nsga2 import NSGA2
+from pymoo.algorithms.soo.nonconvex.ga import GA
 
-from bench.experiments.ga import GaSettings, non_dominated, random_search, run_ga, run_nsga2
+from bench.experiments.ga import (
+    GaSettings,
+    _drive,
+    _PymooProblem,
+    non_dominated,
+    random_search,
+    run_ga,
+    run_nsga2,
+)
 from planner.errors import SlopewalkError
 from planner.gait_search import (
     PENALTY,
@@ -202,6 +212,42 @@ def test_same_seed_same_result_bit_for_bit(problem):
     assert np.array_equal(first.history, second.history)
     other = run_ga(problem, GaSettings(population=12, generations=4, seed=8, constraint="margin"))
     assert not np.array_equal(first.log["X"], other.log["X"])
+
+
+@dataclass(frozen=True)
+class Terraces(Bowl):
+    """The bowl with its work rounded to 0.02: many tournaments are ties, drawn at random."""
+
+    def measure(self, X) -> Measurement:
+        m = super().measure(X)
+        return Measurement(np.round(m.work / 0.02) * 0.02, m.margin, m.joint_gap)
+
+
+@pytest.mark.parametrize("constraint", ["penalty", "margin"])
+def test_array_operators_make_the_same_run_as_pymoo_s(constraint):
+    # ga_operators replaces pymoo's tournament, survival and duplicate test by array
+    # versions that must compare, eliminate and draw exactly as pymoo's do
+    terraces = Terraces(r=0.1)
+    settings = GaSettings(population=30, generations=40, seed=3, constraint=constraint)
+    ours = run_ga(terraces, settings)
+    problem = _PymooProblem(terraces, constraint)
+    _drive(
+        GA(**settings.operators() | {"eliminate_duplicates": True}), problem, settings, False, ""
+    )
+    theirs = problem.log.arrays()
+    assert np.array_equal(ours.log["X"], theirs["X"])
+    assert np.array_equal(ours.log["F"], theirs["F"])
+
+
+def test_array_duplicates_make_the_same_nsga2_run_as_pymoo_s():
+    settings = GaSettings(population=30, generations=30, seed=4)
+    runs = []
+    for duplicates in (settings.operators()["eliminate_duplicates"], True):
+        problem = _PymooProblem(Terraces(r=0.1), "pareto")
+        _drive(NSGA2(**settings.operators() | {"eliminate_duplicates": duplicates}), problem,
+               settings, False, "")  # fmt: skip
+        runs.append(problem.log.arrays()["X"])
+    assert np.array_equal(*runs)
 
 
 @pytest.mark.parametrize(
