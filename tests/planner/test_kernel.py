@@ -177,3 +177,16 @@ def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path
     assert result.stdout.strip() == "4401"
     assert list((home / ".cache" / "slopewalk" / "numba").rglob("*.nbi"))
     assert not list(install.rglob("*.nbi")) and not list(install.rglob("*.nbc"))
+
+
+@pytest.mark.parametrize("preset, expected", [(None, "passive"), ("active", "active")])
+def test_openmp_workers_sleep_between_kernel_calls_unless_the_user_says(preset, expected):
+    """OMP_WAIT_POLICY defaults to passive (planner/kernel/__init__.py), before the pool starts."""
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    if preset:
+        env["OMP_WAIT_POLICY"] = preset
+    code = "import os, planner.kernel; print(os.environ['OMP_WAIT_POLICY'])"
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip() == expected
