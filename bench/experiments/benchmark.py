@@ -243,7 +243,9 @@ def ga_figures() -> dict:
     search (warm numba cache); ``measure_s`` the planner's share of ``wall_s`` and
     ``driver_ms_per_gen`` the rest per generation; ``driver_cpu_ms_per_gen`` the same
     in this process's CPU time (the driver is single-threaded, so this moves less
-    with other jobs' load than the wall-time split). ``feasible`` and ``work_J`` say
+    with other jobs' load than the wall-time split; it includes what the kernel's
+    worker threads burn while the driver runs, i.e. spinning OpenMP workers, which
+    ``planner/kernel/__init__.py`` puts to sleep). ``feasible`` and ``work_J`` say
     what it found, so a fast but broken run shows.
     """
     from bench.experiments.ga import GaSettings, run_ga
