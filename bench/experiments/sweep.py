@@ -1,7 +1,8 @@
 """Run a sweep: every trial of a sweep file, in parallel, each row written as it finishes.
 
-The sweep-specific half; the generic half (workers, one job each at a time,
-worker deaths, signals, progress) is ``executor.py``. Trials run as calls of
+The sweep-specific half; the generic half (the resumable table run shared with
+``slopewalk envelope``) is ``batch.py``, on top of ``executor.py`` (workers, one
+job each at a time, worker deaths, signals) and ``progress.py``. Trials run as calls of
 the top-level ``run_one`` on local spawned workers (``LocalPool``) or on any
 ``concurrent.futures`` executor, e.g. a Dask ``distributed.Client``'s
 (``--cluster ADDRESS``, ``FuturesPool``).
@@ -39,22 +40,15 @@ import contextlib
 import os
 import time
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.executor import (
-    FuturesPool,
-    Interrupted,
-    LocalPool,
-    Lost,
-    interruptible,
-    one_line,
-)
-from bench.experiments.progress import Progress
+from bench.experiments.batch import Batch, Stopped, duration, run_batch
+from bench.experiments.executor import one_line
 from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.experiments.sweep_table import COLUMNS, CONTROLLER_COLUMNS, SweepTable, read_rows
+from bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -96,6 +90,20 @@ def error_row(trial: SweepTrial, cause: str) -> dict:
         "simulated_verdict": "error",
         "error": cause,
     }
+
+
+SWEEP_BATCH = Batch(
+    name="sweep",
+    fmt=SWEEP,
+    fn=run_one,
+    key=lambda trial: trial.trial_id,
+    label=lambda trial: trial.label,
+    error_row=error_row,
+    is_error=lambda row: row["simulated_verdict"] == "error",
+    source="the sweep file",
+    unit="trials",
+)
+__all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep", "open_cluster"]
 
 
 def outcome_columns(result, plan) -> dict:
@@ -179,14 +187,6 @@ def open_cluster(cluster: str):
         client.close()
 
 
-class Stopped(Interrupted):
-    """A sweep stopped by SIGINT or SIGTERM; ``message`` says what was kept and how to go on."""
-
-    def __init__(self, signum: int, message: str):
-        super().__init__(signum)
-        self.message = message
-
-
 @dataclass(frozen=True)
 class SweepSummary:
     """What a sweep run did.
@@ -225,14 +225,6 @@ class SweepSummary:
         return out + [f"lost: {line}" for line in self.lost[:5]]
 
 
-def _duration(seconds: float) -> str:
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 5400:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
-
-
 def run_sweep(
     config: SweepConfig,
     out_dir: str | Path,
@@ -264,131 +256,58 @@ def run_sweep(
     """
     start = time.perf_counter()
     out_dir = Path(out_dir)
-    final, partial = out_dir / TABLE_NAME, out_dir / PARTIAL_NAME
     record_dir = out_dir / RECORDINGS_DIR if record else None
     workers = workers or os.cpu_count() or 1
-    # a table that is not ours is refused here; one of the previous version may be replaced
-    columns = CONTROLLER_COLUMNS if config.closed_loop else COLUMNS
-    finished = (
-        read_rows(final, previous_ok=resume is not True, columns=columns) if final.exists() else {}
-    )
-    with interruptible(), SweepTable.open(partial, columns) as table:
-        try:
-            if not table.created and resume is False:
-                raise SweepError(
-                    f"{out_dir} holds an unfinished sweep ({len(table.rows)} trials in "
-                    f"{PARTIAL_NAME}): add --resume to finish it, or remove {partial} to start over"
-                )
-            if table.created and resume:
-                for line in finished.values():
-                    table.append_line(line)
-            _check_trials(table, config)
-        except BaseException:
-            if table.created:
-                os.remove(partial)
-            raise
-        total = len(config.trials)
-        done = sum(  # every row is a trial of config (checked above)
-            record_dir is None or (record_dir / f"{i}.rrd").exists() for i in table.rows
-        )
-        todo = _todo(config, table, record_dir)
-        if total - done <= SORT_LIMIT:
-            todo = sorted(todo, key=lambda t: -t.step_time * (t.steps + 0.4))  # longest first
-        bar = Progress(total, done, tty=progress, quiet=quiet, name="sweep")
-        steps_left = config.trials.simulated_steps() * (total - done) / max(total, 1)
+    total = len(config.trials)
+    sim_steps = [0]
+    steps_left = [0.0]
+
+    def intro(done: int, workers: int) -> str:
+        steps_left[0] = config.trials.simulated_steps() * (total - done) / max(total, 1)
         if executor is None:
             where = f" on {workers} workers"
-            estimate = f"about {_duration(steps_left / (SIM_RATE * workers))}"
+            estimate = f"about {duration(steps_left[0] / (SIM_RATE * workers))}"
         else:
-            where, estimate = "", f"about {_duration(steps_left / SIM_RATE)} of worker time"
-        bar.say(
+            where, estimate = "", f"about {duration(steps_left[0] / SIM_RATE)} of worker time"
+        return (
             f"sweep: {total} trials, {done} already done, {total - done} to run{where}: "
             f"{estimate} at {SIM_RATE:.0f} sim steps/s per worker (refined as trials finish)"
         )
-        inflight: dict[str, SweepTrial] = {}
 
-        def jobs():
-            for trial in todo:
-                inflight[trial.trial_id] = trial
-                yield trial.trial_id, (trial, None if record_dir is None else str(record_dir))
+    def after_row(row: dict, left_trials: int) -> str:
+        sim_steps[0] += row.get("sim_steps") or 0
+        left, elapsed = steps_left[0] - sim_steps[0], time.perf_counter() - start
+        if not sim_steps[0] or left <= 0:
+            return ""
+        return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
-        pool = (
-            LocalPool(run_one, workers=workers)
-            if executor is None
-            else FuturesPool(run_one, executor, window=4 * workers)
-        )
-        ran = errors = sim_steps = 0
-        lost = []
-        try:
-            with pool:
-                for trial_id, outcome in pool.run(jobs()):
-                    trial = inflight.pop(trial_id)
-                    if isinstance(outcome, Lost) and not outcome.known:
-                        lost.append(f"{trial.label}: {outcome.cause}")
-                        bar.update(f"{trial.label}: lost")
-                        continue
-                    row = error_row(trial, outcome.cause) if isinstance(outcome, Lost) else outcome
-                    table.append(row)
-                    ran += 1
-                    errors += row["simulated_verdict"] == "error"
-                    sim_steps += row.get("sim_steps") or 0
-                    left, elapsed = steps_left - sim_steps, time.perf_counter() - start
-                    rate = sim_steps / elapsed
-                    eta = f", about {_duration(left / rate)} left" if sim_steps else ""
-                    bar.update(
-                        f"{trial.label}: {row['analytic_verdict']}/{row['simulated_verdict']}",
-                        eta if left > 0 and done + ran < total else "",
-                    )
-        except BaseException as err:
-            bar.close()
-            if table.created and not table.rows:  # nothing of ours to keep: leave no file
-                os.remove(partial)
-            if not isinstance(err, Interrupted):
-                raise
-            raise Stopped(
-                err.signum,
-                f"stopped by {err.args[0]}: {len(table.rows)} of {total} trials are in "
-                f"{partial}; run the same command with --resume to finish"
-                if table.rows
-                else f"stopped by {err.args[0]} before any trial finished; nothing written",
-            ) from None
-        bar.close()
-        if not lost:
-            table.write_finished(final, (t.trial_id for t in config.trials))
-            os.remove(partial)
-        counts = dict(table.counts())
-    return SweepSummary(
-        table=final if not lost else partial,
-        total=total,
-        resumed=done,
-        ran=ran,
-        errors=errors,
-        lost=tuple(lost),
-        sim_steps=sim_steps,
-        wall_s=time.perf_counter() - start,
-        verdicts=counts,
+    result = run_batch(
+        replace(  # a sweep that names a controller has one more column (sweep_table.py)
+            SWEEP_BATCH,
+            source=config.source,
+            fmt=SWEEP_CONTROLLER if config.closed_loop else SWEEP,
+        ),
+        config.trials,
+        total,
+        out_dir,
+        workers=workers,
+        executor=executor,
+        resume=resume,
+        record_dir=record_dir,
+        progress=progress,
+        quiet=quiet,
+        order=(lambda t: -t.step_time * (t.steps + 0.4)) if total <= SORT_LIMIT else None,
+        intro=intro,
+        after_row=after_row,
     )
-
-
-def _todo(config: SweepConfig, table: SweepTable, record_dir: Path | None):
-    """The trials of ``config`` still to run, lazily: no row yet, or no recording asked for."""
-    for trial in config.trials:
-        if trial.trial_id not in table.rows or (
-            record_dir is not None and not (record_dir / f"{trial.trial_id}.rrd").exists()
-        ):
-            yield trial
-
-
-def _check_trials(table: SweepTable, config: SweepConfig) -> None:
-    """Refuse a table with rows of trials that are not in ``config`` (another sweep's)."""
-    if not table.rows:
-        return
-    stray = set(table.rows)
-    for trial in config.trials:
-        stray.discard(trial.trial_id)
-        if not stray:
-            return
-    raise SweepError(
-        f"{table.path}: {len(stray)} rows (e.g. trial_id {min(stray)}) are not trials of "
-        f"{config.source}: another sweep's table, or the sweep file changed; use another --out"
+    return SweepSummary(
+        table=result.table,
+        total=total,
+        resumed=result.resumed,
+        ran=result.ran,
+        errors=result.errors,
+        lost=result.lost,
+        sim_steps=sum(r.get("sim_steps") or 0 for r in result.rows),
+        wall_s=time.perf_counter() - start,
+        verdicts=result.verdicts,
     )

@@ -29,6 +29,11 @@ lengths in mm to 0.1 µm (4 decimals), times to 0.1 ms, angles to 1e-5 deg,
 torques to 1 µN·m, work to 0.1 µJ, ratios and fractions to 1e-6. ``nan`` is
 not-a-number, booleans are ``True``/``False``, a missing value an empty field;
 pandas and polars read the file as it is.
+
+The same machinery serves any table of this kind (the stability envelope's
+``envelope.csv``): a ``TableFormat`` names its columns, their precisions and
+the verdict columns with their allowed values; ``SWEEP`` and ``SWEEP_CONTROLLER``
+are the sweep's, and the module-level functions below are their methods.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ import math
 import os
 from collections import Counter
 from collections.abc import Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from bench.experiments.sweep_config import SweepError
@@ -124,33 +130,184 @@ PREVIOUS_LAYOUTS = (
     (*COLUMNS[:_FIDELITY], "error"),
     (*COLUMNS[:_FIDELITY], "error", "controller"),
 )
-_PREVIOUS_HEADERS = {(",".join(c) + "\n").encode(): c for c in PREVIOUS_LAYOUTS}
-
-
-def _previous_layout(data: bytes) -> tuple[str, ...] | None:
-    """The older layout whose header ``data`` starts with, if any."""
-    return _PREVIOUS_HEADERS.get(data.split(b"\n", 1)[0] + b"\n")
-
-
 _ID_CHARS = frozenset("0123456789abcdef")
+
+
+@dataclass(frozen=True)
+class TableFormat:
+    """The columns of one kind of results table and what ``parse`` checks in them.
+
+    Attributes:
+        kind: What writes it, for messages ("sweep": "not a sweep table").
+        columns: Column names; the first is the row's 12-hex-digit id.
+        decimals: Outcome columns written at a fixed precision: digits after the point.
+        verdicts: Column -> the values it may hold (checked on every read).
+        previous_layouts: Columns of older versions, which a fresh run may replace
+            (``parse(previous_ok=True)``).
+        siblings: (columns, why) of layouts that are this kind's but not this table's,
+            refused with ``why`` (a sweep with or without a controller column).
+    """
+
+    kind: str
+    columns: tuple[str, ...]
+    decimals: dict = field(default_factory=dict)
+    verdicts: dict = field(default_factory=dict)
+    previous_layouts: tuple[tuple[str, ...], ...] = ()
+    siblings: tuple[tuple[tuple[str, ...], str], ...] = ()
+
+    @property
+    def header(self) -> bytes:
+        return _header(self.columns)
+
+    @property
+    def article(self) -> str:
+        """ "a sweep", "an envelope"."""
+        return f"{'an' if self.kind[0] in 'aeiou' else 'a'} {self.kind}"
+
+    def _previous_layout(self, data: bytes) -> tuple[str, ...] | None:
+        first = data.split(b"\n", 1)[0] + b"\n"
+        return next((c for c in self.previous_layouts if _header(c) == first), None)
+
+    def format_row(self, row: dict) -> bytes:
+        """One complete CSV line (newline included) of ``row``'s columns."""
+        buffer = io.StringIO()
+        csv.writer(buffer, lineterminator="\n").writerow(
+            text(c, row.get(c), self.decimals) for c in self.columns
+        )
+        return buffer.getvalue().encode()
+
+    def parse(
+        self, data: bytes, path: Path, *, torn_ok: bool = False, previous_ok: bool = False
+    ) -> tuple[dict[str, bytes], int]:
+        """The rows of a table (by id, last one wins) and the length of its whole lines.
+
+        Args:
+            data: The file's contents.
+            path: For messages.
+            torn_ok: Accept a last line without its newline (left out of the rows).
+            previous_ok: Accept a table of ``previous_layouts`` too (checked the
+                same way), which a fresh run may replace; its rows are not returned.
+
+        Raises:
+            SweepError: ``data`` is not such a table (module doc), naming what is wrong.
+        """
+        where = f"{path}: not {self.article} table"
+        hint = "; move it away or choose another --out"
+        try:
+            data.decode()
+        except UnicodeDecodeError as err:
+            raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
+        expected = columns = self.columns
+        previous = self._previous_layout(data)
+        sibling = next((why for c, why in self.siblings if data.startswith(_header(c))), None)
+        if previous_ok and previous:
+            columns = previous
+        elif sibling:
+            raise SweepError(f"{where} for this {self.kind} ({sibling}){hint}")
+        elif not data.startswith(self.header):
+            first = data.split(b"\n", 1)[0]
+            what = (
+                "no header line"
+                if b"\n" not in data
+                else "written by an older slopewalk (its columns are another version's): run "
+                "without --resume to replace it"
+                if previous
+                else f"its header is not that of these {len(expected)} columns (another version?)"
+                if first.startswith(f"{expected[0]},".encode())
+                else "its first line is not the header"
+            )
+            raise SweepError(f"{where} ({what}){hint}")
+        whole = data.rfind(b"\n") + 1
+        if whole < len(data) and not torn_ok:
+            raise SweepError(f"{where} (its last line has no newline: a torn write?){hint}")
+        rows: dict[str, bytes] = {}
+        lines = data[data.index(b"\n") + 1 : whole].split(b"\n")[:-1]
+        id_column = expected[0]
+        for number, line in enumerate(lines, start=2):
+            fields = next(csv.reader([line.decode()]), [])
+            if len(fields) != len(columns):
+                raise SweepError(
+                    f"{path}: line {number} has {len(fields)} fields, not {len(columns)}"
+                )
+            row = dict(zip(columns, fields, strict=True))
+            row_id = row[id_column]
+            if len(row_id) != 12 or not set(row_id) <= _ID_CHARS:
+                raise SweepError(
+                    f"{path}: line {number}: {id_column} {row_id!r} is not a "
+                    f"{id_column.removesuffix('_id')} id"
+                )
+            for column, allowed in self.verdicts.items():
+                if column in row and row[column] not in allowed:
+                    raise SweepError(
+                        f"{path}: line {number}: {column} {row[column]!r} is not one of "
+                        + ", ".join(allowed)
+                    )
+            rows[row_id] = line + b"\n"
+        return (rows if columns is expected else {}), whole
+
+    def read_rows(self, path: str | Path, *, previous_ok: bool = False) -> dict[str, bytes]:
+        """The rows of a finished table (``parse``), by id."""
+        path = Path(path)
+        try:
+            data = path.read_bytes()
+        except IsADirectoryError:
+            raise SweepError(f"{path}: is a directory, not {self.article} table") from None
+        except OSError as err:
+            raise SweepError(f"{path}: cannot read ({err.strerror})") from None
+        return self.parse(data, path, previous_ok=previous_ok)[0]
+
+    def fields(self, line: bytes, *columns: str) -> tuple[str, ...]:
+        """The values of ``columns`` in one table line."""
+        values = next(csv.reader([line.decode()]))
+        return tuple(values[self.columns.index(c)] for c in columns)
+
+
+def _header(columns) -> bytes:
+    return (",".join(columns) + "\n").encode()
+
+
+_SWEEP_VERDICTS = {"analytic_verdict": ANALYTIC_VERDICTS, "simulated_verdict": SIMULATED_VERDICTS}
+SWEEP = TableFormat(
+    "sweep",
+    COLUMNS,
+    DECIMALS,
+    _SWEEP_VERDICTS,
+    PREVIOUS_LAYOUTS,
+    ((CONTROLLER_COLUMNS, "its columns are those of a sweep with a controller key"),),
+)
+SWEEP_CONTROLLER = TableFormat(
+    "sweep",
+    CONTROLLER_COLUMNS,
+    DECIMALS,
+    _SWEEP_VERDICTS,
+    PREVIOUS_LAYOUTS,
+    ((COLUMNS, "its columns are those of a sweep without a controller key"),),
+)
+
+
+def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
+    """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS`` or ``CONTROLLER_COLUMNS``)."""
+    if columns == COLUMNS:
+        return SWEEP
+    if columns == CONTROLLER_COLUMNS:
+        return SWEEP_CONTROLLER
+    return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)
 
 
 def format_row(row: dict, columns: tuple[str, ...] = COLUMNS) -> bytes:
     """One complete CSV line (newline included) of ``row``'s ``columns``."""
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow(text(c, row.get(c)) for c in columns)
-    return buffer.getvalue().encode()
+    return sweep_format(columns).format_row(row)
 
 
-def text(column: str, value) -> str:
-    """``value`` of ``column`` as written in the table (module doc)."""
+def text(column: str, value, decimals: dict = DECIMALS) -> str:
+    """``value`` of ``column`` as written in the table (module doc); ``decimals`` by column."""
     if value is None:
         return ""
     if isinstance(value, float):  # np.float64 too: its repr is not a plain number
         value = float(value)
-        if column not in DECIMALS or not math.isfinite(value):
+        if column not in decimals or not math.isfinite(value):
             return repr(value)
-        out = f"{value:.{DECIMALS[column]}f}"
+        out = f"{value:.{decimals[column]}f}"
         return out[1:] if out.startswith("-") and not out.strip("-0.") else out  # no "-0.0000"
     return " ".join(str(value).split()) if isinstance(value, str) else str(value)
 
@@ -163,136 +320,69 @@ def parse(
     previous_ok: bool = False,
     columns: tuple[str, ...] = COLUMNS,
 ) -> tuple[dict[str, bytes], int]:
-    """The rows of a table (by ``trial_id``, last one wins) and the length of its whole lines.
-
-    Args:
-        data: The file's contents.
-        path: For messages.
-        torn_ok: Accept a last line without its newline (left out of the rows).
-        previous_ok: Accept a table of ``PREVIOUS_LAYOUTS`` too (checked the
-            same way), which a fresh run may replace; its rows are not returned.
-        columns: The table's columns, ``COLUMNS`` or ``CONTROLLER_COLUMNS``.
-
-    Raises:
-        SweepError: ``data`` is not a sweep table (module doc), naming what is wrong.
-    """
-    where = f"{path}: not a sweep table"
-    hint = "; move it away or choose another --out"
-    try:
-        data.decode()
-    except UnicodeDecodeError as err:
-        raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
-    expected, header = columns, (",".join(columns) + "\n").encode()
-    other = CONTROLLER_HEADER if columns == COLUMNS else HEADER
-    if previous_ok and _previous_layout(data):
-        columns = _previous_layout(data)
-    elif data.startswith(other):
-        raise SweepError(
-            f"{where} for this sweep (its columns are those of a sweep "
-            f"{'with' if other == CONTROLLER_HEADER else 'without'} a controller key){hint}"
-        )
-    elif not data.startswith(header):
-        first = data.split(b"\n", 1)[0]
-        what = (
-            "no header line"
-            if b"\n" not in data
-            else "written by an older slopewalk (its columns are another version's): run "
-            "without --resume to replace it"
-            if _previous_layout(data)
-            else f"its header is not that of these {len(expected)} columns (another version?)"
-            if first.startswith(b"trial_id,")
-            else "its first line is not the header"
-        )
-        raise SweepError(f"{where} ({what}){hint}")
-    whole = data.rfind(b"\n") + 1
-    if whole < len(data) and not torn_ok:
-        raise SweepError(f"{where} (its last line has no newline: a torn write?){hint}")
-    rows: dict[str, bytes] = {}
-    lines = data[data.index(b"\n") + 1 : whole].split(b"\n")[:-1]
-    for number, line in enumerate(lines, start=2):
-        fields = next(csv.reader([line.decode()]), [])
-        if len(fields) != len(columns):
-            raise SweepError(f"{path}: line {number} has {len(fields)} fields, not {len(columns)}")
-        row = dict(zip(columns, fields, strict=True))
-        trial_id = row["trial_id"]
-        if len(trial_id) != 12 or not set(trial_id) <= _ID_CHARS:
-            raise SweepError(f"{path}: line {number}: trial_id {trial_id!r} is not a trial id")
-        for column, allowed in (
-            ("analytic_verdict", ANALYTIC_VERDICTS),
-            ("simulated_verdict", SIMULATED_VERDICTS),
-        ):
-            if row[column] not in allowed:
-                raise SweepError(
-                    f"{path}: line {number}: {column} {row[column]!r} is not one of "
-                    + ", ".join(allowed)
-                )
-        rows[trial_id] = line + b"\n"
-    return (rows if columns is expected else {}), whole
+    """The rows of a sweep table and the length of its whole lines (``TableFormat.parse``)."""
+    return sweep_format(columns).parse(data, path, torn_ok=torn_ok, previous_ok=previous_ok)
 
 
 def read_rows(
     path: str | Path, *, previous_ok: bool = False, columns: tuple[str, ...] = COLUMNS
 ) -> dict[str, bytes]:
-    """The rows of a finished table (``parse``), by ``trial_id``."""
-    path = Path(path)
-    try:
-        data = path.read_bytes()
-    except IsADirectoryError:
-        raise SweepError(f"{path}: is a directory, not a sweep table") from None
-    except OSError as err:
-        raise SweepError(f"{path}: cannot read ({err.strerror})") from None
-    return parse(data, path, previous_ok=previous_ok, columns=columns)[0]
+    """The rows of a finished sweep table (``parse``), by ``trial_id``."""
+    return sweep_format(columns).read_rows(path, previous_ok=previous_ok)
 
 
 def verdicts(line: bytes) -> tuple[str, str]:
-    """(analytic, simulated) verdict of one table line."""
-    fields = next(csv.reader([line.decode()]))
-    return fields[COLUMNS.index("analytic_verdict")], fields[COLUMNS.index("simulated_verdict")]
+    """(analytic, simulated) verdict of one sweep table line."""
+    return SWEEP.fields(line, "analytic_verdict", "simulated_verdict")
 
 
 class SweepTable:
-    """An open partial table: the rows already there (by ``trial_id``) and an appender.
+    """An open partial table: the rows already there (by id) and an appender.
 
-    Use ``SweepTable.open(path)`` as a context manager.
+    Use ``SweepTable.open(path)`` as a context manager; ``columns`` (the sweep's
+    ``COLUMNS`` or ``CONTROLLER_COLUMNS``) or a ``TableFormat`` for another kind.
 
     Attributes:
         path: The file.
+        fmt: Its ``TableFormat``; columns: its columns.
         created: True when this open made the file (it held no row before).
-        rows: trial_id -> the row's line (bytes, newline included).
+        rows: id -> the row's line (bytes, newline included).
     """
 
-    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool, columns=COLUMNS):
+    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool, fmt=SWEEP):
         self.path, self._fd, self.rows, self.created = path, fd, rows, created
-        self.columns = columns
+        self.fmt = fmt if isinstance(fmt, TableFormat) else sweep_format(fmt)
+        self.columns = self.fmt.columns
 
     @classmethod
     @contextlib.contextmanager
-    def open(cls, path: str | Path, columns: tuple[str, ...] = COLUMNS):
+    def open(cls, path: str | Path, columns: tuple[str, ...] | TableFormat = COLUMNS):
         """Create (with its header) or reopen the table at ``path``, locked for this process.
 
         Raises:
-            SweepError: another sweep holds the file, or it is not a sweep table.
+            SweepError: another run holds the file, or it is not a table of this format.
         """
+        fmt = columns if isinstance(columns, TableFormat) else sweep_format(columns)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd = _locked(path)
+        fd = _locked(path, fmt.kind)
         try:
             size = os.fstat(fd).st_size
             if size == 0:
-                os.write(fd, (",".join(columns) + "\n").encode())
+                os.write(fd, fmt.header)
                 rows, created = {}, True
             else:
-                rows, whole = parse(os.pread(fd, size, 0), path, torn_ok=True, columns=columns)
-                if whole < size:  # our own torn last line (module doc): its trial runs again
+                rows, whole = fmt.parse(os.pread(fd, size, 0), path, torn_ok=True)
+                if whole < size:  # our own torn last line (module doc): its row runs again
                     os.truncate(fd, whole)
                 created = False
-            yield cls(path, fd, rows, created, columns)
+            yield cls(path, fd, rows, created, fmt)
         finally:
             os.close(fd)
 
     def append(self, row: dict) -> None:
-        """Append one finished trial's row: a single write of the whole line."""
-        self.append_line(format_row(row, self.columns))
+        """Append one finished row: a single write of the whole line."""
+        self.append_line(self.fmt.format_row(row))
 
     def append_line(self, line: bytes) -> None:
         """Append one formatted line (``format_row``) whole."""
@@ -301,8 +391,8 @@ class SweepTable:
         self.rows[line.split(b",", 1)[0].decode()] = line
 
     def counts(self) -> Counter:
-        """(analytic, simulated) verdict -> rows."""
-        return Counter(verdicts(line) for line in self.rows.values())
+        """Verdicts (the values of the format's verdict columns, in order) -> rows."""
+        return Counter(self.fmt.fields(line, *self.fmt.verdicts) for line in self.rows.values())
 
     def write_finished(self, path: str | Path, order: Iterable[str]) -> None:
         """Write the rows, ids of ``order`` first, to ``path`` whole (atomically)."""
@@ -313,12 +403,12 @@ class SweepTable:
         lines = list(seen.values()) + [v for k, v in self.rows.items() if k not in seen]
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as f:
-                f.write((",".join(self.columns) + "\n").encode())
+                f.write(self.fmt.header)
                 f.writelines(lines)
             os.chmod(tmp, 0o644)
 
 
-def _locked(path: Path) -> int:
+def _locked(path: Path, kind: str = "sweep") -> int:
     """An ``O_APPEND`` descriptor of ``path`` (created if missing) holding its exclusive flock.
 
     If a finishing sweep removed the file between our open and our lock, the
@@ -330,14 +420,14 @@ def _locked(path: Path) -> int:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             os.close(fd)
-            raise SweepError(f"{path}: another sweep is writing this table") from None
+            raise SweepError(f"{path}: another {kind} is writing this table") from None
         try:
             if os.stat(path).st_ino == os.fstat(fd).st_ino:
                 return fd
         except FileNotFoundError:
             pass
         os.close(fd)
-    raise SweepError(f"{path}: removed as it was opened, three times (another sweep finishing?)")
+    raise SweepError(f"{path}: removed as it was opened, three times (another {kind} finishing?)")
 
 
 def read_table(path: str | Path) -> list[dict]:
@@ -355,6 +445,7 @@ def read_table(path: str | Path) -> list[dict]:
                 typed[key] = float(value)
             except ValueError:
                 typed[key] = value
-        typed["mass_scale"] = "" if row["mass_scale"] == "none" else row["mass_scale"]
+        if "mass_scale" in row:  # a sweep table's; other tables have none
+            typed["mass_scale"] = "" if row["mass_scale"] == "none" else row["mass_scale"]
         out.append(typed)
     return out

@@ -1,0 +1,246 @@
+"""A resumable batch: jobs run in parallel into a results table, one row appended as each ends.
+
+What ``slopewalk sweep`` and ``slopewalk envelope`` share; each says only what
+its jobs are (``Batch``). The parallel half is ``executor.py`` (local spawned
+workers or any ``concurrent.futures`` executor, worker deaths, signals), the
+table half ``sweep_table.py`` (whole-line appends, a lock, a ``TableFormat``).
+
+A run directory holds ``<name>.partial.csv`` while a run is going and
+``<name>.csv`` when it is done:
+
+- A fresh run (``resume=False``) runs every job into a new partial table; when
+  all are done, their rows are written to the finished table in the jobs' order
+  (atomically, replacing the finished table of an earlier run) and the partial
+  table is removed. A finished table that is not of this format is refused,
+  never overwritten; so is an unfinished run in the directory, which is the
+  user's to resume or remove.
+- ``resume=True`` counts the rows of the unfinished run, or of the finished
+  table when there is none, as done and runs the rest.
+- ``resume=None`` resumes an unfinished run if there is one, else starts fresh.
+
+A job whose function raises is the job's ``error_row``; so is one whose worker
+died ("worker died: signal 9 (SIGKILL)"), and the run goes on. A job lost by a
+cluster executor, which cannot say which job a lost worker held, leaves no row
+and is reported, to be run by ``--resume``. SIGINT and SIGTERM stop the run with
+every finished row kept (``Stopped``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from pathlib import Path
+
+from bench.experiments.executor import FuturesPool, Interrupted, LocalPool, Lost, interruptible
+from bench.experiments.progress import Progress
+from bench.experiments.sweep_config import SweepError
+from bench.experiments.sweep_table import SweepTable, TableFormat
+
+
+class Stopped(Interrupted):
+    """A run stopped by SIGINT or SIGTERM; ``message`` says what was kept and how to go on."""
+
+    def __init__(self, signum: int, message: str):
+        super().__init__(signum)
+        self.message = message
+
+
+@dataclass(frozen=True)
+class Batch:
+    """What a batch runs and how its rows look.
+
+    Attributes:
+        name: The table's name and the progress prefix ("sweep": ``sweep.csv``).
+        fmt: The table's columns and verdicts.
+        fn: Top-level function (picklable by reference) run in a worker as
+            ``fn(job, record_dir)``; returns the job's row and never raises for a bad job.
+        key: The job's id (the table's first column), 12 hex digits.
+        label: Short human description of a job, for progress lines.
+        error_row: The row of a job that killed its worker, from the job and the cause.
+        is_error: Whether a row counts as an error in the summary.
+        source: Where the jobs come from, for messages (the config file).
+        unit: What a job is, plural, for messages ("trials").
+    """
+
+    name: str
+    fmt: TableFormat
+    fn: Callable
+    key: Callable
+    label: Callable
+    error_row: Callable
+    is_error: Callable
+    source: str
+    unit: str = "jobs"
+
+    def paths(self, out_dir: Path) -> tuple[Path, Path]:
+        """(finished table, partial table) in ``out_dir``."""
+        return out_dir / f"{self.name}.csv", out_dir / f"{self.name}.partial.csv"
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """What a run did: ``table`` (the finished one, or the partial one if jobs were lost),
+    jobs in all, found done, run now, error rows, lost jobs (one line each), verdict counts,
+    and the rows written now (in the order they finished)."""
+
+    table: Path
+    total: int
+    resumed: int
+    ran: int
+    errors: int
+    lost: tuple[str, ...]
+    verdicts: dict
+    rows: tuple[dict, ...]
+
+
+def run_batch(
+    batch: Batch,
+    jobs: Iterable,
+    total: int,
+    out_dir: str | Path,
+    *,
+    workers: int | None = None,
+    executor: Executor | None = None,
+    resume: bool | None = False,
+    record_dir: Path | None = None,
+    progress: bool = False,
+    quiet: bool = False,
+    order: Callable | None = None,
+    intro: Callable[[int, int], str] | None = None,
+    after_row: Callable[[dict, int], str] | None = None,
+) -> BatchResult:
+    """Run ``jobs`` (re-iterable, ``total`` of them) into ``out_dir`` (module doc).
+
+    Args:
+        record_dir: Where jobs write ``<key>.rrd``; a job without its recording is not done.
+        order: Sort key of the jobs still to run (longest first pays off), or None.
+        intro: (done, workers) -> the line said before the first job.
+        after_row: (row, jobs left) -> text appended to progress log lines (an ETA).
+
+    Raises:
+        SweepError: a table there is not of ``batch.fmt``, holds jobs not in
+            ``jobs``, or is an unfinished run and ``resume`` is False.
+        Stopped: SIGINT or SIGTERM; the rows written so far stay in the partial table.
+    """
+    out_dir = Path(out_dir)
+    final, partial = batch.paths(out_dir)
+    workers = workers or os.cpu_count() or 1
+    # a table that is not ours is refused here; one of the previous version may be replaced
+    finished = batch.fmt.read_rows(final, previous_ok=resume is not True) if final.exists() else {}
+    with interruptible(), SweepTable.open(partial, batch.fmt) as table:
+        try:
+            if not table.created and resume is False:
+                raise SweepError(
+                    f"{out_dir} holds an unfinished {batch.name} ({len(table.rows)} "
+                    f"{batch.unit} in {partial.name}): add --resume to finish it, or remove "
+                    f"{partial} to start over"
+                )
+            if table.created and resume:
+                for line in finished.values():
+                    table.append_line(line)
+            _check_keys(table, jobs, batch)
+        except BaseException:
+            if table.created:
+                os.remove(partial)
+            raise
+        done = sum(record_dir is None or (record_dir / f"{k}.rrd").exists() for k in table.rows)
+        todo = (
+            j
+            for j in jobs
+            if batch.key(j) not in table.rows
+            or (record_dir is not None and not (record_dir / f"{batch.key(j)}.rrd").exists())
+        )
+        if order is not None:
+            todo = sorted(todo, key=order)
+        bar = Progress(total, done, tty=progress, quiet=quiet, name=batch.name)
+        if intro is not None:
+            bar.say(intro(done, workers))
+        inflight: dict[str, object] = {}
+
+        def pairs():
+            for job in todo:
+                inflight[batch.key(job)] = job
+                yield batch.key(job), (job, None if record_dir is None else str(record_dir))
+
+        pool = (
+            LocalPool(batch.fn, workers=workers)
+            if executor is None
+            else FuturesPool(batch.fn, executor, window=4 * workers)
+        )
+        ran = errors = 0
+        lost, rows = [], []
+        try:
+            with pool:
+                for key, outcome in pool.run(pairs()):
+                    job = inflight.pop(key)
+                    if isinstance(outcome, Lost) and not outcome.known:
+                        lost.append(f"{batch.label(job)}: {outcome.cause}")
+                        bar.update(f"{batch.label(job)}: lost")
+                        continue
+                    row = outcome
+                    if isinstance(outcome, Lost):
+                        row = batch.error_row(job, outcome.cause)
+                    table.append(row)
+                    rows.append(row)
+                    ran += 1
+                    errors += bool(batch.is_error(row))
+                    left = total - done - ran
+                    verdict = "/".join(str(row.get(c)) for c in batch.fmt.verdicts)
+                    extra = after_row(row, left) if after_row is not None and left > 0 else ""
+                    bar.update(f"{batch.label(job)}: {verdict}", extra)
+        except BaseException as err:
+            bar.close()
+            if table.created and not table.rows:  # nothing of ours to keep: leave no file
+                os.remove(partial)
+            if not isinstance(err, Interrupted):
+                raise
+            raise Stopped(
+                err.signum,
+                f"stopped by {err.args[0]}: {len(table.rows)} of {total} {batch.unit} are in "
+                f"{partial}; run the same command with --resume to finish"
+                if table.rows
+                else f"stopped by {err.args[0]} before any of the {batch.unit} finished; nothing "
+                "written",
+            ) from None
+        bar.close()
+        if not lost:
+            table.write_finished(final, (batch.key(j) for j in jobs))
+            os.remove(partial)
+        counts = dict(table.counts())
+    return BatchResult(
+        table=final if not lost else partial,
+        total=total,
+        resumed=done,
+        ran=ran,
+        errors=errors,
+        lost=tuple(lost),
+        verdicts=counts,
+        rows=tuple(rows),
+    )
+
+
+def _check_keys(table: SweepTable, jobs: Iterable, batch: Batch) -> None:
+    """Refuse a table with rows of jobs that are not in ``jobs`` (another run's)."""
+    if not table.rows:
+        return
+    stray = set(table.rows)
+    for job in jobs:
+        stray.discard(batch.key(job))
+        if not stray:
+            return
+    raise SweepError(
+        f"{table.path}: {len(stray)} rows (e.g. {batch.fmt.columns[0]} {min(stray)}) are not "
+        f"{batch.unit} of {batch.source}: another {batch.name}'s table, or the {batch.name} file "
+        "changed; use another --out"
+    )
+
+
+def duration(seconds: float) -> str:
+    """A duration for people: "40 s", "12 min", "2.5 h"."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
