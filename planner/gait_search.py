@@ -41,7 +41,7 @@ from planner.spec import RobotSpec
 from planner.trajectory import Curve, GaitParams, Timeline
 
 VARIABLES = ("hip_height", "swing_lift", "tilt")
-CONSTRAINTS = ("penalty", "margin")
+CONSTRAINTS = ("penalty", "margin", "stability")
 PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
 MIN_CLEARANCE = 0.005  # [m] smallest swing lift searched: the sole clears the plane by 5 mm
 SAMPLES_PER_STEP = 100  # GA grid: dt = step_time / 100, plus phase-change limits and refinement
@@ -298,9 +298,12 @@ def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray 
     into one violation; both are 0 for a feasible gait, so the units only weigh
     infeasible ones against each other); unreachable individuals get w = 2·10⁴
     and G = 1.
+    "stability" (the stability envelope's first question): the most stable gait,
+    F = −min margin [m], G = (joint gap [rad],) ≤ 0; unreachable individuals get
+    F = 1 m (farther outside than any foot) and G = 1. The work plays no part.
 
     Returns:
-        (F, G): shapes (P,) and (P, 2) or None.
+        (F, G): shapes (P,) and (P, 2), (P, 1) or None.
     """
     reachable = np.isfinite(m.work) & np.isfinite(m.margin)
     work = np.where(reachable, np.minimum(m.work, PENALTY), 2 * PENALTY)
@@ -309,6 +312,9 @@ def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray 
     if constraint == "margin":
         G = np.column_stack([-m.margin, m.joint_gap])
         return work, np.where(reachable[:, None], G, INADMISSIBLE_GAP)
+    if constraint == "stability":
+        F = np.where(reachable, -m.margin, INADMISSIBLE_GAP)
+        return F, np.where(reachable, m.joint_gap, INADMISSIBLE_GAP)[:, None]
     raise SlopewalkError(f"constraint {constraint!r}: must be one of {', '.join(CONSTRAINTS)}")
 
 

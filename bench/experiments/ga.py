@@ -58,7 +58,8 @@ class GaSettings:
         population: Individuals per generation, ≥ 2.
         generations: Generations including the initial one, ≥ 1.
         seed: Seed of the run's random generator, ≥ 0.
-        constraint: "penalty" (paper, eq. 6) or "margin" (``planner.gait_search.objectives``).
+        constraint: "penalty" (paper, eq. 6), "margin" or "stability" (the most stable gait)
+            (``planner.gait_search.objectives``).
         crossover: Probability that a mating pair is crossed (SBX), in [0, 1].
         mutation: Probability that one variable of a child is mutated (PM), in [0, 1].
     """
@@ -130,7 +131,7 @@ class _PymooProblem(Problem):
 
     def __init__(self, problem, mode: str):
         self.inner, self.mode, self.log = problem, mode, _Log()
-        n_constr = {"penalty": 0, "margin": 2, "pareto": 1}[mode]
+        n_constr = {"penalty": 0, "margin": 2, "stability": 1, "pareto": 1}[mode]
         n_obj = 2 if mode == "pareto" else 1
         b = problem.bounds
         super().__init__(n_var=3, n_obj=n_obj, n_ieq_constr=n_constr, xl=b.xl, xu=b.xu)
