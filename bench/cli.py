@@ -341,6 +341,70 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _command(
         sub,
+        "envelope",
+        "the best gait of every step time x slope cell, by the GA, walked in MuJoCo (resumable)",
+        "For every cell of an envelope file (step time x slope x friction x robot; format in "
+        "bench/experiments/envelope_config.py), the GA finds the gait of largest minimum ZMP "
+        "margin and the least-work gait whose margin is at least the required margin; each "
+        "is re-planned at 1 ms and played in MuJoCo in every actuator mode. One row per cell "
+        "and gait family goes to DIR/envelope.partial.csv as it ends, DIR/envelope.csv and "
+        "DIR/envelope.png when all are done. Stopped runs resume as for 'slopewalk sweep'. "
+        "Without CONFIG, the paper's envelope into ./results/envelope, then the claims table "
+        "(with results/sweep.csv).",
+        "slopewalk envelope",
+        "slopewalk envelope --resume            # finish a killed 'slopewalk envelope'",
+        "slopewalk envelope my.toml --out runs/env --workers 4 --record",
+        "slopewalk envelope --convergence       # also re-search 10 % of the cells at 4x budget",
+    )
+    p.add_argument(
+        "config",
+        nargs="?",
+        metavar="CONFIG",
+        help="envelope TOML (default: bench/experiments/envelopes/paper.toml)",
+    )
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output directory: envelope.csv, envelope.png, recordings/ (default: "
+        "./results/envelope)",
+    )
+    p.add_argument(
+        "--workers",
+        type=integer(WORKERS),
+        metavar="N",
+        help=f"local worker processes, in {WORKERS} (default: all cores); ignored with --cluster",
+    )
+    p.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="run on a Dask distributed scheduler, e.g. tcp://host:8786",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="count the cells already in DIR as done and run the rest",
+    )
+    p.add_argument(
+        "--record",
+        action="store_true",
+        help="also write DIR/recordings/<cell_id>.rrd per cell (the max-margin gait, first mode)",
+    )
+    p.add_argument(
+        "--convergence",
+        action="store_true",
+        help="then re-search a seeded 10 %% of the cells with 4x the generations; "
+        "DIR/convergence.md says how many verdicts and how much margin change",
+    )
+    p.add_argument(
+        "--report",
+        action="store_true",
+        help="rewrite the claims table beside DIR (needs DIR/../sweep.csv) for a custom CONFIG "
+        "too (always for the default envelope)",
+    )
+    p.set_defaults(run=commands.envelope)
+
+    p = _command(
+        sub,
         "benchmark",
         "print speed figures as name: value lines",
         "Measure how fast a part of the bench runs and print one 'name: value' line per "
@@ -350,7 +414,9 @@ def build_parser() -> argparse.ArgumentParser:
         "slopewalk benchmark controller   # closed-loop vs rollout steps/s, same trial",
     )
     p.add_argument(
-        "what", choices=("planner", "sim", "ga", "sweep", "controller"), help="what to measure"
+        "what",
+        choices=("planner", "sim", "ga", "sweep", "controller", "envelope"),
+        help="what to measure",
     )
     p.set_defaults(run=commands.benchmark)
     return parser

@@ -273,8 +273,13 @@ def sweep(args) -> None:
         from planner.spec import load_spec
 
         spec = load_spec()
+        table = out / "envelope" / "envelope.csv"
         written = write_report(
-            out, read_table(summary.table), spec, ga_claims(out / "optimize", spec)
+            out,
+            read_table(summary.table),
+            spec,
+            ga_claims(out / "optimize", spec),
+            envelope=(read_table(table), table.relative_to(out)) if table.exists() else None,
         )
         print("wrote " + ", ".join(str(p.name) for p in written))
 
@@ -301,6 +306,76 @@ def controllers(args) -> None:
         tmp.write_text(text)
     print(text, end="")
     print(f"wrote {args.out}")
+
+
+def envelope(args) -> None:
+    import contextlib
+    from pathlib import Path
+
+    from bench.experiments.batch import Stopped
+    from bench.experiments.envelope import run_convergence, run_envelope, write_convergence
+    from bench.experiments.envelope_config import EnvelopeError, load_envelope
+    from bench.experiments.sweep import open_cluster
+
+    config = load_envelope(args.config)  # the whole file is checked before anything runs
+    if args.record:
+        try:
+            import bench.report.recording  # noqa: F401
+        except ImportError as err:
+            raise EnvelopeError(f"--record: recordings are unavailable ({err})") from None
+    out = Path(args.out) if args.out is not None else Path.cwd() / "results" / "envelope"
+    check_output_dir(out)  # before any cell runs
+    resume = True if args.resume else None if args.out is not None else False
+    progress = sys.stderr.isatty()
+    try:
+        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
+            summary = run_envelope(
+                config,
+                out,
+                workers=args.workers,
+                executor=executor,
+                resume=resume,
+                record=args.record,
+                progress=progress,
+            )
+            print("\n".join(summary.lines()))
+            if summary.lost:
+                raise EnvelopeError(
+                    f"{len(summary.lost)} cells lost with their workers; add --resume"
+                )
+            if args.convergence:
+                check = run_convergence(
+                    config, summary.table, out, workers=args.workers, executor=executor,
+                    resume=resume, progress=progress,
+                )  # fmt: skip
+                print("\n".join(check.lines()))
+                print(f"wrote {write_convergence(check, config, out)}")
+    except Stopped as stop:
+        print(f"slopewalk: {stop.message}", file=sys.stderr)
+        raise SystemExit(128 + stop.signum) from None
+    if args.config is None or args.report:
+        _envelope_report(out, summary.table)
+
+
+def _envelope_report(out, table) -> None:
+    """Rewrite the claims table of the sweep beside ``out`` with the envelope's claims."""
+    from bench.experiments.sweep_table import read_table
+    from bench.report.claims import ga_claims, write_report
+    from planner.spec import load_spec
+
+    results = out.parent
+    if not (results / "sweep.csv").exists():
+        print(f"claims not rewritten: no {results / 'sweep.csv'} (run 'slopewalk sweep' first)")
+        return
+    spec = load_spec()
+    written = write_report(
+        results,
+        read_table(results / "sweep.csv"),
+        spec,
+        ga_claims(results / "optimize", spec),
+        envelope=(read_table(table), table.relative_to(results)),
+    )
+    print("wrote " + ", ".join(str(p.name) for p in written))
 
 
 def benchmark(args) -> None:

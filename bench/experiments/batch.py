@@ -62,6 +62,8 @@ class Batch:
         is_error: Whether a row counts as an error in the summary.
         source: Where the jobs come from, for messages (the config file).
         unit: What a job is, plural, for messages ("trials").
+        outcome: A row's outcome in a few words, for progress lines (default: its
+            verdicts joined by "/").
     """
 
     name: str
@@ -73,6 +75,7 @@ class Batch:
     is_error: Callable
     source: str
     unit: str = "jobs"
+    outcome: Callable | None = None
 
     def paths(self, out_dir: Path) -> tuple[Path, Path]:
         """(finished table, partial table) in ``out_dir``."""
@@ -187,7 +190,11 @@ def run_batch(
                     ran += 1
                     errors += bool(batch.is_error(row))
                     left = total - done - ran
-                    verdict = "/".join(str(row.get(c)) for c in batch.fmt.verdicts)
+                    verdict = (
+                        batch.outcome(row)
+                        if batch.outcome is not None
+                        else "/".join(str(row.get(c)) for c in batch.fmt.verdicts)
+                    )
                     extra = after_row(row, left) if after_row is not None and left > 0 else ""
                     bar.update(f"{batch.label(job)}: {verdict}", extra)
         except BaseException as err:

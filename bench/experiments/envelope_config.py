@@ -1,0 +1,246 @@
+"""An envelope file: the TOML grid of cells and the GA settings, checked whole before any cell runs.
+
+Format (degrees and millimetres at this edge, like the CLI)::
+
+    description = "what this envelope is for"   # optional, free text
+    steps = 4            # steps per walk, in [1, 1000] (4)
+
+    [grid]               # the product of these lists is the set of cells
+    step_time = [2.0, 1.0, 0.5]      # [s], in (0, 60]; required
+    slope = [-20, 0, 15]             # [deg], in (-60, 60), negative walks downhill; required
+    friction = [1.0]                 # Coulomb mu, in (0, 10] ([1.0])
+    robot = ["default"]              # spec files, relative to this file (the paper's biped)
+    actuators = ["stiff", "servo"]   # modes each found gait is played in (every mode the bench has)
+
+    [search]             # the GA of every cell (the paper's operators, seeded)
+    population = 40      # in [2, 1000] (40)
+    generations = 30     # in [1, 100000] (30)
+    seed = 0             # in [0, 2^32 - 1] (0)
+    family = ["paper"]   # gait families searched, one row each ("paper")
+    required_margin = 5  # [mm] least ZMP margin of the least-work gait, in [0, 50] (5)
+
+Every key is checked: an unknown key, a value of the wrong type or out of its
+range is refused in one line naming the key, the value and the range (the
+sweep file's rules, ``sweep_config.py``, whose helpers this module uses).
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
+from bench.experiments.sweep_config import SweepError, _body, _known, _number
+from bench.flags import GENERATIONS, POPULATION, SEED
+from bench.sim.model import ACTUATOR_MODES
+from planner import ranges
+from planner.errors import SlopewalkError
+from planner.trajectory import GaitParams
+
+ENVELOPES_DIR = Path(__file__).parent / "envelopes"
+DEFAULT_ENVELOPE = ENVELOPES_DIR / "paper.toml"
+TOP_KEYS = ("description", "steps", "grid", "search")
+GRID_KEYS = ("step_time", "slope", "friction", "robot", "actuators")
+SEARCH_KEYS = ("population", "generations", "seed", "family", "required_margin")
+SEARCH_DEFAULTS = {
+    "population": 40,
+    "generations": 30,
+    "seed": 0,
+    "family": ["paper"],
+    "required_margin": 5.0,
+}
+REQUIRED_MARGIN_MM = ranges.Range(0.0, 50.0, "mm", low_open=False)
+
+
+class EnvelopeError(SweepError):
+    """An envelope file with an unknown key, a bad value or a missing robot file."""
+
+
+@dataclass(frozen=True)
+class EnvelopeConfig:
+    """A parsed envelope file.
+
+    Attributes:
+        source: The file, for messages.
+        cells: Every cell × family, in file order (step time outer, then slope,
+            friction, robot, family).
+        step_times, slopes_deg: The grid's axes as written [s], [deg].
+        search: The GA settings of every cell.
+        modes: Actuator modes each found gait is played in.
+    """
+
+    source: str
+    cells: tuple[EnvelopeCell, ...]
+    step_times: tuple[float, ...]
+    slopes_deg: tuple[float, ...]
+    search: SearchSettings
+    modes: tuple[str, ...]
+    description: str = ""
+
+
+def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
+    """Read and check an envelope file (default: ``bench/experiments/envelopes/paper.toml``).
+
+    Raises:
+        EnvelopeError: unreadable file, unknown key, value out of range or missing
+            robot file, in one line naming the key.
+    """
+    path = Path(path) if path is not None else DEFAULT_ENVELOPE
+    where = f"envelope file {str(path)!r}"
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except FileNotFoundError:
+        raise EnvelopeError(f"{where}: no such file") from None
+    except IsADirectoryError:
+        raise EnvelopeError(f"{where}: is a directory, not an envelope TOML") from None
+    except UnicodeDecodeError as err:
+        raise EnvelopeError(f"{where}: not UTF-8 text (byte {err.start}), so not TOML") from None
+    except tomllib.TOMLDecodeError as err:
+        raise EnvelopeError(f"{where}: not valid TOML ({err})") from None
+    return envelope_from_dict(data, base_dir=path.parent, source=str(path))
+
+
+def envelope_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> EnvelopeConfig:
+    """Build an EnvelopeConfig from parsed TOML; robot paths are relative to ``base_dir``."""
+    try:
+        return _parse(data, base_dir, source)
+    except EnvelopeError:
+        raise
+    except SweepError as err:  # a helper of the sweep file's: the same message, our class
+        raise EnvelopeError(str(err)) from None
+
+
+def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
+    _known(data, TOP_KEYS, "", source)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise EnvelopeError(f"{source}: description = {description!r}: must be a string")
+    steps = _checked(data.get("steps", 4), "steps", ranges.STEPS, source)
+    grid = _table(data, "grid", source, required=True)
+    _known(grid, GRID_KEYS, "grid.", source)
+    search = _table(data, "search", source, required=False)
+    _known(search, SEARCH_KEYS, "search.", source)
+
+    where = f"{source}: grid"
+    step_times = _unique(
+        _checked(v, "grid.step_time", ranges.STEP_TIME, source)
+        for v in _list(grid, "step_time", None, source)
+    )
+    slopes = _unique(
+        _checked(v, "grid.slope", ranges.SLOPE_DEG, source)
+        for v in _list(grid, "slope", None, source)
+    )
+    frictions = _unique(
+        _checked(v, "grid.friction", ranges.FRICTION, source)
+        for v in _list(grid, "friction", [1.0], source)
+    )
+    modes = _unique(_list(grid, "actuators", list(ACTUATOR_MODES), source))
+    for mode in modes:
+        if mode not in ACTUATOR_MODES:
+            raise EnvelopeError(
+                f"{where}.actuators = {mode!r}: must be one of {', '.join(ACTUATOR_MODES)}"
+            )
+    robots: dict = {}
+    bodies = [
+        _body(r, (), robots, base_dir, where) for r in _list(grid, "robot", ["default"], source)
+    ]
+    bodies = list({b.spec_json: b for b in reversed(bodies)}.values())[::-1]  # first kept
+
+    settings = _search(search, source)
+    for body, t in itertools.product(bodies, step_times):  # the gait's own checks, per value
+        for s in slopes:
+            try:
+                GaitParams.nominal(body.spec, t, slope=float(np.deg2rad(s)), steps=steps)
+            except SlopewalkError as err:
+                raise EnvelopeError(f"{where}: step_time {t:g} s, slope {s:g} deg: {err}") from None
+    cells = tuple(
+        EnvelopeCell(
+            step_time=t,
+            slope_deg=s,
+            friction=mu,
+            robot=body.robot,
+            family=family,
+            steps=steps,
+            search=settings,
+            modes=modes,
+            spec=body.spec,
+            spec_json=body.spec_json,
+        )
+        for t, s, mu, body, family in itertools.product(
+            step_times, slopes, frictions, bodies, settings.families
+        )
+    )
+    return EnvelopeConfig(source, cells, step_times, slopes, settings, modes, description)
+
+
+def _search(table: dict, source: str) -> SearchSettings:
+    values = SEARCH_DEFAULTS | table
+    families = values["family"]
+    families = [families] if isinstance(families, str) else families
+    if not isinstance(families, list) or not families:
+        raise EnvelopeError(
+            f"{source}: search.family = {values['family']!r}: must be a family name or a "
+            f"non-empty list of them ({', '.join(FAMILIES)})"
+        )
+    for family in families:
+        if family not in FAMILIES:
+            raise EnvelopeError(
+                f"{source}: search.family = {family!r}: must be one of {', '.join(FAMILIES)}"
+            )
+    margin = _checked(
+        values["required_margin"], "search.required_margin", REQUIRED_MARGIN_MM, source
+    )
+    return SearchSettings(
+        population=_checked(values["population"], "search.population", POPULATION, source),
+        generations=_checked(values["generations"], "search.generations", GENERATIONS, source),
+        seed=_checked(values["seed"], "search.seed", SEED, source),
+        families=tuple(_unique(families)),
+        required_margin=float(margin) * 1e-3,
+    )
+
+
+def _checked(value, key: str, allowed: ranges.Range, source: str):
+    """``value`` if ``allowed`` holds it, else one line naming the key, value and range."""
+    if not allowed.contains(value):
+        unit = f" {allowed.unit}" if allowed.unit and _is_number(value) else ""
+        raise EnvelopeError(f"{source}: {key} = {ranges.show(value)}{unit}: {allowed.requirement}")
+    return int(value) if allowed.integer else float(value)
+
+
+def _is_number(value) -> bool:
+    try:
+        _number(value, "", "")
+    except SweepError:
+        return False
+    return True
+
+
+def _table(data: dict, key: str, source: str, *, required: bool) -> dict:
+    value = data.get(key)
+    if value is None:
+        if required:
+            raise EnvelopeError(f"{source}: no [{key}] table: give at least step_time and slope")
+        return {}
+    if not isinstance(value, dict):
+        raise EnvelopeError(f"{source}: {key} must be a table [{key}]")
+    return value
+
+
+def _list(table: dict, key: str, default, source: str) -> list:
+    if key not in table:
+        if default is None:
+            raise EnvelopeError(f"{source}: grid.{key} is missing: give a list, e.g. {key} = [1.0]")
+        return default
+    values = table[key]
+    if not isinstance(values, list) or not values:
+        raise EnvelopeError(f"{source}: grid.{key} = {values!r}: must be a non-empty list")
+    return values
+
+
+def _unique(values) -> tuple:
+    return tuple(dict.fromkeys(values))
