@@ -156,6 +156,11 @@ class TableFormat:
     siblings: tuple[tuple[tuple[str, ...], str], ...] = ()
 
     @property
+    def article(self) -> str:
+        """ "a sweep", "an envelope"."""
+        return f"{'an' if self.kind[0] in 'aeiou' else 'a'} {self.kind}"
+
+    @property
     def header(self) -> bytes:
         return _header(self.columns)
 

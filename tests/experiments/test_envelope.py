@@ -1,0 +1,160 @@
+"""Whole envelopes through the command line: rows, 1 ms margins, resume after kills, convergence."""
+
+import os
+import signal
+import subprocess
+import sys
+from dataclasses import replace
+
+import pytest
+
+from bench.cli import main
+from bench.experiments.envelope_cell import ENVELOPE, run_cell
+from bench.experiments.envelope_config import envelope_from_dict
+from bench.experiments.sweep_table import read_table
+from bench.sim.model import ACTUATOR_MODES
+from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
+
+TINY = """\
+steps = 2
+[grid]
+step_time = [1.0, 0.5]
+slope = [0, 15]
+[search]
+population = 10
+generations = 4
+"""
+ENVELOPE_CMD = [sys.executable, "-m", "bench.cli", "envelope"]
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """The tiny envelope (2 x 2 cells) run once through the CLI: (config path, out dir)."""
+    root = tmp_path_factory.mktemp("envelope")
+    config = root / "tiny.toml"
+    config.write_text(TINY)
+    out = root / "out"
+    assert main(["envelope", str(config), "--out", str(out), "--workers", "2"]) == 0
+    return config, out
+
+
+def test_a_tiny_envelope_writes_one_row_per_cell_and_the_figure(tiny):
+    _, out = tiny
+    assert sorted(p.name for p in out.iterdir()) == ["envelope.csv", "envelope.png"]
+    data = (out / "envelope.csv").read_bytes()
+    assert data.startswith(ENVELOPE.header)
+    rows = read_table(out / "envelope.csv")
+    assert [(r["step_time"], r["slope_deg"]) for r in rows] == [
+        (1.0, 0.0),
+        (1.0, 15.0),
+        (0.5, 0.0),
+        (0.5, 15.0),
+    ]
+    for r in rows:
+        assert r["error"] == "" and r["ga_evaluations"] == 2 * 10 * 4
+        for mode in ACTUATOR_MODES:  # the max-margin gait is played in every mode the bench has
+            assert r[f"maxmargin_{mode}_verdict"] in ("stable", "slip", "tip", "fall", "diverged")
+    flat = rows[0]
+    assert flat["feasible"] == "True" and flat["minwork_found"] == "True"  # 1 s on flat ground
+    assert rows[2]["feasible"] == "False"  # 0.5 s: the paper's family has no gait inside
+    assert (out / "envelope.png").stat().st_size > 20_000
+
+
+def test_found_gaits_keep_their_margin_re_planned_at_1_ms(tiny):
+    """The GA's margin is the continuous walk's, so a 1 ms plan never has less."""
+    rows = read_table(tiny[1] / "envelope.csv")
+    checked = 0
+    for r in rows:
+        if r["feasible"] == "True":
+            assert r["maxmargin_margin_1ms_mm"] >= 0
+            assert r["maxmargin_margin_1ms_mm"] >= r["maxmargin_margin_mm"] - 1e-3
+            checked += 1
+        if r["minwork_found"] == "True":
+            assert r["minwork_margin_1ms_mm"] >= r["required_margin_mm"]
+            checked += 1
+        else:
+            assert r["minwork_margin_mm"] < r["required_margin_mm"]
+            assert all(r[f"minwork_{m}_verdict"] == "" for m in ACTUATOR_MODES)  # not played
+    assert checked >= 3
+
+
+def test_a_second_run_resumes_to_the_same_bytes(tiny, capsys):
+    config, out = tiny
+    before = (out / "envelope.csv").read_bytes()
+    assert main(["envelope", str(config), "--out", str(out), "--resume"]) == 0
+    assert "4 cells, 4 already done, 0 to run" in capsys.readouterr().err
+    assert (out / "envelope.csv").read_bytes() == before
+
+
+def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path):
+    config, reference = tiny
+    out = tmp_path / "out"
+    command = [*ENVELOPE_CMD, str(config), "--out", str(out), "--workers", "2"]
+    with _started(command, tmp_path) as (proc, err):
+        _wait_rows(out / "envelope.partial.csv", 1, proc, timeout=120)
+        os.kill(proc.pid, signal.SIGKILL)  # the main process only: its workers must follow it
+        assert proc.wait(timeout=30) == -signal.SIGKILL
+        kept = _rows_in(out / "envelope.partial.csv")
+        resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True)
+        assert _gone(proc.pid) == [], "workers outlived their envelope"
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"4 cells, {kept} already done, {4 - kept} to run" in resumed.stderr
+    assert not (out / "envelope.partial.csv").exists()
+    assert (out / "envelope.csv").read_bytes() == (reference / "envelope.csv").read_bytes()
+
+
+def test_an_unfinished_run_is_resumed_or_refused(tiny, tmp_path, capsys):
+    config, reference = tiny
+    out = tmp_path / "out"
+    out.mkdir()
+    lines = (reference / "envelope.csv").read_bytes().splitlines(keepends=True)
+    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
+    assert main(["envelope", str(config), "--out", str(out), "--resume"]) == 0
+    assert "4 cells, 1 already done, 3 to run" in capsys.readouterr().err
+    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
+    assert main(["envelope", str(config), "--out", str(out)]) == 0  # --out: resumes it
+    assert "4 cells, 1 already done, 3 to run" in capsys.readouterr().err
+    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
+    cwd = os.getcwd()
+    os.chdir(tmp_path)  # the default --out is ./results/envelope
+    try:
+        (tmp_path / "results").mkdir()
+        os.replace(out, tmp_path / "results" / "envelope")
+        assert main(["envelope", str(config)]) == 2  # a plain run does not resume
+    finally:
+        os.chdir(cwd)
+    err = capsys.readouterr().err
+    assert "holds an unfinished envelope (1 cells in envelope.partial.csv)" in err
+
+
+def test_a_sweep_table_is_not_an_envelope_table(tiny, tmp_path, capsys):
+    config, _ = tiny
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "envelope.csv").write_text("trial_id,step_time\n")
+    assert main(["envelope", str(config), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "not an envelope table (its first line is not the header)" in err
+    assert err.count("\n") == 1 and (out / "envelope.csv").read_text() == "trial_id,step_time\n"
+
+
+def test_a_cell_that_raises_is_an_error_row(tmp_path):
+    """A cell whose walk cannot be planned (built past the file's checks) is a row, not a crash."""
+    config = envelope_from_dict({"grid": {"step_time": [0.3], "slope": [0]}}, base_dir=tmp_path)
+    cell = replace(config.cells[0], step_time=0.009)  # under 10 samples of 1 ms
+    row = run_cell(cell)
+    assert row["error"].startswith("step time 0.009 s: must lie in") and "\n" not in row["error"]
+    assert all(row[f"maxmargin_{m}_verdict"] == "error" for m in ACTUATOR_MODES)
+    assert ENVELOPE.parse(ENVELOPE.header + ENVELOPE.format_row(row), tmp_path)[0]
+
+
+def test_convergence_reports_its_figures(tiny, capsys):
+    config, out = tiny
+    assert main(["envelope", str(config), "--out", str(out), "--convergence"]) == 0
+    printed = capsys.readouterr().out
+    assert "convergence: 1 cells re-searched with 4x the generations" in printed
+    text = (out / "convergence.md").read_text()
+    assert "feasibility verdicts that change: " in text and "16 instead of 4 generations" in text
+    rows = read_table(out / "convergence.csv")
+    assert len(rows) == 1 and rows[0]["generations"] == 16
+    assert all(rows[0][f"maxmargin_{m}_verdict"] == "" for m in ACTUATOR_MODES)  # GA only

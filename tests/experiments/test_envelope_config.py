@@ -1,0 +1,123 @@
+"""Envelope files: every key checked, one line naming key, value and range, nothing run."""
+
+import sys
+
+import pytest
+
+from bench.cli import main
+from bench.experiments.envelope_config import (
+    DEFAULT_ENVELOPE,
+    EnvelopeError,
+    envelope_from_dict,
+    load_envelope,
+)
+from bench.sim.model import ACTUATOR_MODES
+
+GOOD = {"grid": {"step_time": [1.0], "slope": [0]}}
+
+
+def _with(section: str, **values) -> dict:
+    data = {"grid": dict(GOOD["grid"])}
+    data.setdefault(section, {}).update(values)
+    return data
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        ({"grid": {"step_time": [1.0], "slope": [0], "frction": [1]}}, "unknown key grid.frction"),
+        ({**GOOD, "search": {"populaton": 4}}, "unknown key search.populaton"),
+        ({**GOOD, "sweep": 1}, "unknown key sweep"),
+        ({}, "no [grid] table"),
+        ({"grid": {"slope": [0]}}, "grid.step_time is missing"),
+        ({"grid": {"step_time": [1.0]}}, "grid.slope is missing"),
+        (_with("grid", step_time=[]), "grid.step_time = []: must be a non-empty list"),
+        (_with("grid", step_time=1.0), "grid.step_time = 1.0: must be a non-empty list"),
+        (_with("grid", step_time=[0]), "grid.step_time = 0 s: must lie in (0, 60] s"),
+        (_with("grid", step_time=[-0.5]), "grid.step_time = -0.5 s: must lie in (0, 60] s"),
+        (_with("grid", step_time=["1"]), "grid.step_time = '1': must lie in (0, 60] s"),
+        (_with("grid", step_time=[True]), "grid.step_time = True: must lie in (0, 60] s"),
+        (_with("grid", step_time=[0.005]), "at least 10 samples"),
+        (_with("grid", slope=[60]), "grid.slope = 60 deg: must lie in (-60, 60) deg"),
+        (_with("grid", slope=[-75.5]), "grid.slope = -75.5 deg: must lie in (-60, 60) deg"),
+        (_with("grid", slope=[float("nan")]), "grid.slope = nan: must lie in (-60, 60) deg"),
+        (_with("grid", friction=[0]), "grid.friction = 0: must lie in (0, 10]"),
+        (_with("grid", friction=[11]), "grid.friction = 11: must lie in (0, 10]"),
+        (_with("grid", actuators=["soft"]), "grid.actuators = 'soft': must be one of stiff"),
+        (_with("grid", robot=["nope.toml"]), "no such file"),
+        (_with("search", population=1), "search.population = 1: must be an integer in [2, 1000]"),
+        (_with("search", population=4.5), "search.population = 4.5: must be an integer in"),
+        (_with("search", generations=0), "search.generations = 0: must be an integer in [1,"),
+        (_with("search", seed=-1), "search.seed = -1: must be an integer in [0, 4294967295]"),
+        (_with("search", family="wide"), "search.family = 'wide': must be one of paper"),
+        (_with("search", family=[]), "search.family = []: must be a family name or"),
+        (_with("search", required_margin=-1), "search.required_margin = -1 mm: must lie in [0,"),
+        (_with("search", required_margin=60), "search.required_margin = 60 mm: must lie in"),
+        ({**GOOD, "steps": 0}, "steps = 0: must be an integer in [1, 1000]"),
+        ({**GOOD, "description": 3}, "description = 3: must be a string"),
+    ],
+)
+def test_bad_values_are_refused_in_one_line(tmp_path, data, message):
+    with pytest.raises(EnvelopeError) as err:
+        envelope_from_dict(data, base_dir=tmp_path, source="e.toml")
+    text = str(err.value)
+    assert message in text and "\n" not in text and text.startswith("e.toml: ")
+
+
+def test_defaults_and_the_cells(tmp_path):
+    config = envelope_from_dict(
+        {"grid": {"step_time": [1.0, 0.5, 1.0], "slope": [0, -10]}}, base_dir=tmp_path
+    )
+    assert config.modes == ACTUATOR_MODES  # every mode the bench has, by default
+    assert config.search.population == 40 and config.search.required_margin == 0.005
+    assert [(c.step_time, c.slope_deg) for c in config.cells] == [
+        (1.0, 0.0),
+        (1.0, -10.0),
+        (0.5, 0.0),
+        (0.5, -10.0),
+    ]  # duplicates dropped, file order
+    assert len({c.cell_id for c in config.cells}) == 4
+    other = envelope_from_dict(
+        {"grid": {"step_time": [1.0], "slope": [0]}, "search": {"seed": 1}}, base_dir=tmp_path
+    )
+    assert other.cells[0].cell_id != config.cells[0].cell_id  # the search decides the row
+
+
+def test_the_default_envelope_covers_the_papers_plane():
+    config = load_envelope()
+    assert config.source == str(DEFAULT_ENVELOPE)
+    assert len(config.step_times) >= 12 and max(config.step_times) == 2.0
+    assert min(config.step_times) == 0.3 and 0.5 in config.step_times
+    assert len(config.slopes_deg) >= 16 and (min(config.slopes_deg), max(config.slopes_deg)) == (
+        -30,
+        35,
+    )
+    assert {15, 18, 22.5, 30} <= set(config.slopes_deg)
+    assert {c.friction for c in config.cells} == {1.0}
+    assert {c.family for c in config.cells} == {"paper"}
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("[grid\n", "not valid TOML"),
+        (None, "no such file"),
+        (b"\x00\xff binary", "not UTF-8 text (byte 1), so not TOML"),
+        ("[grid]\nstep_time = [1.0]\nslope = [90]\n", "grid.slope = 90 deg: must lie in"),
+    ],
+)
+def test_the_command_refuses_a_bad_file_in_one_line_and_writes_nothing(
+    tmp_path, capsys, text, message
+):
+    path = tmp_path / "e.toml"
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    elif text is not None:
+        path.write_text(text)
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exited:
+        sys.exit(main(["envelope", str(path), "--out", str(out)]))
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("slopewalk: error: ") and message in err and err.count("\n") == 1
+    assert not out.exists()
