@@ -92,6 +92,8 @@ def envelope_figure(rows: list[dict]):
             lines.append((base[f"walks_{mode}"], colour, "-", 2.4, f"MuJoCo {mode} walks", offset))
         for n, (field, colour, style, width, label, offset) in enumerate(lines):
             _boundary(ax, field, colour, style, width, label, offset, (n + 0.5) / len(lines))
+        ax.set_xlim(-0.6, len(slopes) - 0.2)
+        ax.set_ylim(len(times) - 0.2, -0.6)
         if modes:
             ii, jj = np.nonzero(base[f"walks_{modes[0]}"] == 1)
             ax.scatter(jj, ii, s=16, color=_MODE_COLOURS[0], zorder=3)
@@ -133,8 +135,9 @@ def edges(field: np.ndarray) -> list[tuple[tuple[float, float], tuple[float, flo
 
 def _boundary(ax, field, colour, style, width, label, offset, where) -> None:
     """The staircase around ``field``'s cells, shifted ``offset`` cells so coinciding
-    boundaries lie side by side, with ``label`` written beside the segment at share
-    ``where`` of its width (labels of different lines fall at different places)."""
+    boundaries lie side by side, with ``label`` written under its fast edge (the lowest
+    segment of a column) at share ``where`` of its width, so labels of different lines
+    fall at different places."""
     from matplotlib.collections import LineCollection
 
     segments = edges(field)
@@ -147,13 +150,18 @@ def _boundary(ax, field, colour, style, width, label, offset, where) -> None:
         LineCollection(shifted, colors=colour, linestyles=style, linewidths=width, zorder=4)
     )
     horizontal = [s for s in shifted if s[0][1] == s[1][1]] or shifted
-    xs = sorted({(s[0][0] + s[1][0]) / 2 for s in horizontal})
-    x = xs[min(len(xs) - 1, int(where * len(xs)))]
-    (x0, y0), (x1, y1) = min(horizontal, key=lambda s: abs((s[0][0] + s[1][0]) / 2 - x))
+    # the fast edge (the lowest segment of each column) is where the boundaries differ most
+    lowest: dict[float, tuple] = {}
+    for seg in horizontal:
+        x = round((seg[0][0] + seg[1][0]) / 2, 6)
+        if x not in lowest or seg[0][1] > lowest[x][0][1]:
+            lowest[x] = seg
+    xs = sorted(lowest)
+    (x0, y0), (x1, y1) = lowest[xs[min(len(xs) - 1, int(where * len(xs)))]]
     ax.annotate(
         label,
         ((x0 + x1) / 2, (y0 + y1) / 2),
-        xytext=(0, 9 if offset >= 0 else -9),
+        xytext=(0, -10),
         textcoords="offset points",
         ha="center",
         va="center",

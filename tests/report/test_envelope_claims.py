@@ -1,0 +1,64 @@
+"""Claims 1 and 2 from the envelope: the fastest flat step time, the steepest slopes at 1 s."""
+
+from bench.report.envelope_claims import envelope_cell_note, envelope_claims
+
+
+def _row(t, s, feasible, walks):
+    return {
+        "family": "paper",
+        "friction": 1.0,
+        "robot": "default",
+        "error": "",
+        "step_time": t,
+        "slope_deg": s,
+        "feasible": str(feasible),
+        "maxmargin_margin_mm": 3.0 if feasible else -4.0,
+        "maxmargin_hip_height_m": 0.15,
+        "maxmargin_swing_lift_m": 0.005,
+        "maxmargin_tilt_deg": 10.0,
+        "minwork_found": "False",
+        "minwork_work_J": 1.0,
+        "required_margin_mm": 5.0,
+        "maxmargin_stiff_verdict": "stable" if walks else "fall",
+        "maxmargin_servo_verdict": "tip",
+    }
+
+
+ROWS = [
+    _row(1.0, 0.0, True, True),
+    _row(0.7, 0.0, True, True),
+    _row(0.5, 0.0, True, False),
+    _row(0.4, 0.0, False, False),
+    _row(1.0, -20.0, False, False),
+    _row(1.0, -10.0, True, True),
+    _row(1.0, 15.0, True, True),
+    _row(1.0, 22.5, True, False),
+    _row(1.0, 25.0, False, True),
+    {**_row(0.3, 0.0, True, True), "family": "extended"},  # another family: not the paper's
+]
+
+
+def test_claim_1_is_the_fastest_flat_step_time_with_a_gait_inside():
+    first = envelope_claims(ROWS, "envelope/envelope.csv")[0]
+    assert "fastest t_c with a gait inside: 0.5 s" in first["analytic"]
+    assert "at 0.4 s: largest margin -4.0 mm" in first["analytic"]
+    assert "stiff: fastest walked 0.7 s" in first["simulated"]
+    assert "that gait in MuJoCo: stiff fall, servo tip" in first["simulated"]
+    assert first["agree"] == "analytic yes, simulated no (stiff)"
+    assert first["evidence"] == "envelope.png, envelope/envelope.csv (slope 0)"
+
+
+def test_claim_2_is_the_steepest_slopes_at_1_s():
+    second = envelope_claims(ROWS, "e.csv")[1]
+    assert second["analytic"].startswith(
+        "steepest uphill with the ZMP inside: 22.5°; steepest downhill: -10°"
+    )
+    assert "stiff: walks -10° … 25° (4 of 6 slopes)" in second["simulated"]
+    assert second["agree"] == "analytic yes, simulated no (stiff)"  # MuJoCo walks 25° too
+
+
+def test_the_ga_rows_cite_the_envelope_cell():
+    note = envelope_cell_note(ROWS, 22.5, "e.csv")
+    assert note.startswith("; envelope cell t_c 1 s, 22.5° (e.csv): feasible, largest margin 3.0")
+    assert "no gait with margin ≥ 5 mm found; MuJoCo: stiff fall, servo tip" in note
+    assert envelope_cell_note(ROWS, 30.0, "e.csv") == ""
