@@ -78,3 +78,31 @@ def test_sweep_doc_example_is_a_valid_sweep(tmp_path):
 @pytest.mark.parametrize("doc", [ROBOT_DOC, SWEEP_DOC])
 def test_readme_links_the_docs(doc):
     assert f"]({doc.relative_to(ROOT)})" in (ROOT / "README.md").read_text()
+
+
+ENVELOPE_DOC = ROOT / "docs" / "envelope-format.md"
+
+
+def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
+    from bench.experiments.envelope_config import (
+        GRID_KEYS,
+        SEARCH_DEFAULTS,
+        SEARCH_KEYS,
+        TOP_KEYS,
+        envelope_from_dict,
+    )
+    from bench.sim.model import ACTUATOR_MODES
+
+    rows = _rows(ENVELOPE_DOC)
+    for key in (*TOP_KEYS[:2], *GRID_KEYS, *SEARCH_KEYS):
+        assert key in rows, f"{key} is not documented"
+    for key in SEARCH_KEYS:
+        assert _toml_value(rows[key][-1]) == SEARCH_DEFAULTS[key], key
+    config = envelope_from_dict({"grid": {"step_time": [1.0], "slope": [0]}}, base_dir=tmp_path)
+    assert config.modes == ACTUATOR_MODES and rows["actuators"][-1] == "every mode the bench has"
+    (example,) = re.findall(r"```toml\n(.*?)```", ENVELOPE_DOC.read_text(), re.S)
+    assert len(envelope_from_dict(tomllib.loads(example), base_dir=tmp_path).cells) == 15
+
+
+def test_readme_links_the_envelope_doc():
+    assert f"]({ENVELOPE_DOC.relative_to(ROOT)})" in (ROOT / "README.md").read_text()

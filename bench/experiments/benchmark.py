@@ -420,4 +420,11 @@ def run(what: str) -> dict:
         "ga": ga_figures,
         "sweep": lambda: grid_figures() | sweep_figures(),
         "controller": controller_figures,
+        "envelope": _envelope_figures,
     }[what]()
+
+
+def _envelope_figures() -> dict:
+    from bench.experiments.envelope_benchmark import envelope_figures
+
+    return envelope_figures()

@@ -30,7 +30,7 @@ from bench.experiments.envelope_config import EnvelopeConfig
 
 RECORDINGS_DIR = "recordings"
 FIGURE_NAME = "envelope.png"
-CELL_S = 6.0  # [s] per cell and worker, the first estimate (GA 2 x 1200 evaluations + 4 trials)
+CELL_S = 2.5  # [s] per cell and worker, the first estimate (GA 2 x 3000 evaluations + 4 trials)
 CONVERGENCE_SHARE = 0.10
 CONVERGENCE_FACTOR = 4
 
@@ -73,7 +73,8 @@ def _outcome(row: dict) -> str:
 
 @dataclass(frozen=True)
 class EnvelopeSummary:
-    """What an envelope run did: its table, counts, wall time and the GA's rate."""
+    """What an envelope run did: its table, counts, wall time, and the workers' time [s]
+    in the GA (``ga_s``) and in planning at 1 ms and playing (``sim_s``), this run's cells."""
 
     table: Path
     total: int
@@ -85,6 +86,7 @@ class EnvelopeSummary:
     wall_s: float
     ga_evaluations: int
     ga_s: float
+    sim_s: float = 0.0
 
     @property
     def cells_per_min(self) -> float:
@@ -167,6 +169,7 @@ def run_envelope(
         wall_s=time.perf_counter() - start,
         ga_evaluations=sum(r.get("ga_evaluations") or 0 for r in result.rows),
         ga_s=sum(r.get("ga_s") or 0.0 for r in result.rows),
+        sim_s=sum(r.get("sim_s") or 0.0 for r in result.rows),
     )
 
 

@@ -65,6 +65,7 @@ def test_found_gaits_keep_their_margin_re_planned_at_1_ms(tiny):
     rows = read_table(tiny[1] / "envelope.csv")
     checked = 0
     for r in rows:
+        assert r["maxmargin_margin_mm"] >= r["minwork_margin_mm"]  # the most stable of both
         if r["feasible"] == "True":
             assert r["maxmargin_margin_1ms_mm"] >= 0
             assert r["maxmargin_margin_1ms_mm"] >= r["maxmargin_margin_mm"] - 1e-3

@@ -1,0 +1,53 @@
+"""``slopewalk benchmark envelope``: the default envelope end to end, as ``name: value`` figures.
+
+Runs ``bench/experiments/envelopes/paper.toml`` (paper family, both objectives,
+MuJoCo in every actuator mode) on all cores into a temp dir and reports
+``cells``, ``wall_s`` (pool start to the figure), ``cells_per_min`` and
+``ga_evals_per_s`` (GA evaluations per second of GA time in one worker, both
+searches of every cell), with the share of the workers' time spent in the GA
+(``ga_share``) against planning at 1 ms and playing in MuJoCo. ``cpu_s`` (this
+process and its workers) is what the run cost; on a machine shared with other
+jobs ``wall_s`` moves with their load and ``cpu_s`` much less. The goal, from the
+README, is ``wall_s`` ≤ 300 on a 2-core machine of its own.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import tempfile
+import time
+
+
+def _cpu_s() -> float:
+    own, children = (
+        resource.getrusage(resource.RUSAGE_SELF),
+        resource.getrusage(resource.RUSAGE_CHILDREN),
+    )
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def envelope_figures() -> dict:
+    from bench.experiments.envelope import run_envelope
+    from bench.experiments.envelope_config import load_envelope
+
+    config = load_envelope()
+    workers = os.cpu_count() or 1
+    with tempfile.TemporaryDirectory() as out:
+        start, start_cpu = time.perf_counter(), _cpu_s()
+        summary = run_envelope(config, out, workers=workers, quiet=True)
+        wall, cpu = time.perf_counter() - start, _cpu_s() - start_cpu
+    busy = summary.ga_s + summary.sim_s
+    return {
+        "cells": summary.total,
+        "errors": summary.errors,
+        "workers": workers,
+        "population": config.search.population,
+        "generations": config.search.generations,
+        "wall_s": wall,
+        "cells_per_min": 60 * summary.total / wall,
+        "ga_evaluations": summary.ga_evaluations,
+        "ga_evals_per_s": summary.ga_evals_per_s,
+        "ga_share": summary.ga_s / busy if busy > 0 else float("nan"),
+        "cpu_s": cpu,
+    }
