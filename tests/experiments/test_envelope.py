@@ -9,6 +9,7 @@ from dataclasses import replace
 import pytest
 
 from bench.cli import main
+from bench.experiments.envelope import compare_budgets, convergence_cells
 from bench.experiments.envelope_cell import ENVELOPE, run_cell
 from bench.experiments.envelope_config import envelope_from_dict
 from bench.experiments.sweep_table import read_table
@@ -159,3 +160,38 @@ def test_convergence_reports_its_figures(tiny, capsys):
     rows = read_table(out / "convergence.csv")
     assert len(rows) == 1 and rows[0]["generations"] == 16
     assert all(rows[0][f"maxmargin_{m}_verdict"] == "" for m in ACTUATOR_MODES)  # GA only
+
+
+def test_convergence_counts_flips_and_the_largest_margin_change(tmp_path):
+    grid = {"step_time": [2.0, 1.0, 0.5, 0.4, 0.3], "slope": [0, 10, 20, 30]}
+    config = envelope_from_dict({"grid": grid}, base_dir=tmp_path)
+    base, bigger = convergence_cells(config)
+    assert len(base) == 2 and [c.search.generations for c in bigger] == [120, 120]
+    assert [b.step_time for b in base] == [b.step_time for b in bigger]
+    assert base == convergence_cells(config)[0]  # seeded: the same cells every time
+
+    def table(name, cells, margins, feasible, found):
+        lines = [
+            ENVELOPE.format_row(
+                c.inputs()
+                | {
+                    "maxmargin_margin_mm": m,
+                    "feasible": f,
+                    "minwork_found": w,
+                    "minwork_work_J": 1.0,
+                }
+            )
+            for c, m, f, w in zip(cells, margins, feasible, found, strict=True)
+        ]
+        path = tmp_path / name
+        path.write_bytes(ENVELOPE.header + b"".join(lines))
+        return path
+
+    small = table("a.csv", base, [2.0, -30.0], [True, False], [False, False])
+    large = table("b.csv", bigger, [2.4, -20.0], [True, False], [False, False])
+    check = compare_budgets(small, large, base, bigger)
+    assert (check.flips, check.found_flips) == (0, 0)
+    assert check.max_change_mm == pytest.approx(0.4) and check.max_change_all_mm == 10.0
+    flipped = table("c.csv", bigger, [2.4, 0.5], [True, True], [False, True])
+    check = compare_budgets(small, flipped, base, bigger)
+    assert (check.flips, check.found_flips) == (1, 1) and check.max_change_mm == 30.5
