@@ -27,7 +27,6 @@ sweep file's rules, ``sweep_config.py``, whose helpers this module uses).
 from __future__ import annotations
 
 import itertools
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +37,7 @@ from bench.experiments.sweep_config import SweepError, _body, _known, _number
 from bench.flags import GENERATIONS, POPULATION, SEED
 from bench.sim.model import ACTUATOR_MODES
 from planner import ranges
+from planner.config_file import load_toml
 from planner.errors import SlopewalkError
 from planner.trajectory import GaitParams
 
@@ -91,17 +91,7 @@ def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
     """
     path = Path(path) if path is not None else DEFAULT_ENVELOPE
     where = f"envelope file {str(path)!r}"
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except FileNotFoundError:
-        raise EnvelopeError(f"{where}: no such file") from None
-    except IsADirectoryError:
-        raise EnvelopeError(f"{where}: is a directory, not an envelope TOML") from None
-    except UnicodeDecodeError as err:
-        raise EnvelopeError(f"{where}: not UTF-8 text (byte {err.start}), so not TOML") from None
-    except tomllib.TOMLDecodeError as err:
-        raise EnvelopeError(f"{where}: not valid TOML ({err})") from None
+    data = load_toml(path, where=where, kind="an envelope TOML", error=EnvelopeError)
     return envelope_from_dict(data, base_dir=path.parent, source=str(path))
 
 

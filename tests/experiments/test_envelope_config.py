@@ -102,7 +102,7 @@ def test_the_default_envelope_covers_the_papers_plane():
     [
         ("[grid\n", "not valid TOML"),
         (None, "no such file"),
-        (b"\x00\xff binary", "not UTF-8 text (byte 1), so not TOML"),
+        (b"\x00\xff binary", "not UTF-8 text (byte 0xff at offset 1)"),
         ("[grid]\nstep_time = [1.0]\nslope = [90]\n", "grid.slope = 90 deg: must lie in"),
     ],
 )
