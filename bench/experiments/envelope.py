@@ -282,12 +282,18 @@ def run_convergence(
     return compare_budgets(table, result.table, base, bigger)
 
 
-def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergence:
-    """The ``Convergence`` of the rows of ``base`` in ``table`` vs ``bigger`` in the other."""
+def _by_id(path) -> dict[str, dict]:
+    """The rows of a table (``read_table``: numbers as floats) by their id as written
+    (an id of decimal digits only would read as a number)."""
     from bench.experiments.sweep_table import read_table
 
-    small = {r["cell_id"]: r for r in read_table(table)}
-    large = {r["cell_id"]: r for r in read_table(bigger_table)}
+    ids = ENVELOPE.read_rows(path)
+    return dict(zip(ids, read_table(path), strict=True))
+
+
+def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergence:
+    """The ``Convergence`` of the rows of ``base`` in ``table`` vs ``bigger`` in the other."""
+    small, large = _by_id(table), _by_id(bigger_table)
     flips = found_flips = 0
     change = change_all = work_change = 0.0
     rows = []

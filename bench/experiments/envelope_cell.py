@@ -4,12 +4,16 @@ A cell is a step time × slope × friction × robot × gait family. Its GA (the
 paper's operators, ``ga.run_ga``, seeded) answers two questions:
 
 - **max-margin**: the gait of largest minimum ZMP margin (treatment
-  ``stability``, or a gait of larger margin the min-work search met on its way);
+  ``stability``; any individual of either search counts, since both search the
+  same walk);
   the cell is *feasible* when that margin is ≥ 0 with every joint inside its
   limits: a gait with the ZMP inside the polygon exists.
 - **min-work**: the least-work gait whose margin is ≥ the required margin
   (treatment ``margin`` on the margin minus the requirement); *found* when the
   GA has one.
+
+A chosen gait must also plan at 1 ms: one whose legs overreach between the GA's
+samples is passed over for the next best (``_choose``).
 
 Each gait the GA returns as admissible (joints inside their limits) is planned
 again at 1 ms (``plan_walk``: its margin there is ``*_margin_1ms_mm``, never
@@ -43,6 +47,7 @@ from planner.spec import RobotSpec
 
 FAMILIES = ("paper",)  # (Hz, Szmax, θ1max), planner/gait_search.py
 GAITS = ("maxmargin", "minwork")
+MAX_REPLANS = 8  # candidates tried per gait when the best cannot be planned at 1 ms
 GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
                 "swing_lift_m", "tilt_deg")  # fmt: skip
 
@@ -245,57 +250,97 @@ def _run(cell: EnvelopeCell, record_dir: str | None, simulate: bool) -> dict:
         _Shifted(problem, s.required_margin), GaSettings(**settings, constraint="margin")
     )
     ga_s = time.perf_counter() - start
-    most = _most_stable(stable, cheap, s.required_margin)
     row = cell.inputs() | {
-        "feasible": most.feasible,
         "ga_evaluations": stable.evaluations + cheap.evaluations,
         "error": "",
         "ga_s": ga_s,
     }
     start = time.perf_counter()
-    for gait, best, margin, found in (
-        ("maxmargin", most, most.margin, most.feasible),
-        ("minwork", cheap.best, cheap.best.margin + s.required_margin, cheap.best.feasible),
+    pool = _Pool.of(stable, cheap, s.required_margin)
+    for gait, order, fallback in (
+        ("maxmargin", pool.most_stable(), stable.best),
+        ("minwork", pool.least_work(s.required_margin), cheap.best),
     ):
-        row |= {
-            f"{gait}_found": found,
-            f"{gait}_margin_mm": margin * 1e3,
-            f"{gait}_work_J": best.work,
-            f"{gait}_hip_height_m": float(best.x[0]),
-            f"{gait}_swing_lift_m": float(best.x[1]),
-            f"{gait}_tilt_deg": float(np.rad2deg(best.x[2])),
-        }
-        admissible = np.isfinite(best.work) and best.joint_gap <= 0
-        if not admissible or (gait == "minwork" and not found):
-            continue
-        record = record_dir if gait == "maxmargin" else None
-        row |= _play(cell, gait, best.x, record if simulate else None, simulate)
+        row |= _choose(cell, gait, pool, order, fallback, s.required_margin, record_dir, simulate)
+    row["feasible"] = row["maxmargin_found"]
     row["sim_s"] = time.perf_counter() - start
     return row
 
 
-def _most_stable(stable, cheap, required: float):
-    """The max-margin gait: the stability search's best, unless the min-work search met a
-    gait of larger margin on its way (both search the same walk; the min-work log holds
-    margins less ``required``). Returns a ``ga.Best``."""
-    from bench.experiments.ga import Best
+@dataclass(frozen=True)
+class _Pool:
+    """Every individual both searches evaluated (they search the same walk): X, work,
+    true margin [m] (the min-work log's margins are shifted back) and joint gap."""
 
-    log = cheap.log
-    ok = np.isfinite(log["work"]) & np.isfinite(log["margin"]) & (log["gap"] <= 0)
-    if not ok.any():
-        return stable.best
-    i = int(np.flatnonzero(ok)[np.argmax(log["margin"][ok])])
-    margin = float(log["margin"][i]) + required
-    if stable.best.joint_gap <= 0 and margin <= stable.best.margin:
-        return stable.best
-    return Best(
-        x=log["X"][i].copy(),
-        work=float(log["work"][i]),
-        margin=margin,
-        joint_gap=float(log["gap"][i]),
-        objective=-margin,
-        feasible=margin >= 0,
-    )
+    X: np.ndarray
+    work: np.ndarray
+    margin: np.ndarray
+    gap: np.ndarray
+
+    @classmethod
+    def of(cls, stable, cheap, required: float) -> _Pool:
+        a, b = stable.log, cheap.log
+        return cls(
+            np.concatenate([a["X"], b["X"]]),
+            np.concatenate([a["work"], b["work"]]),
+            np.concatenate([a["margin"], b["margin"] + required]),
+            np.concatenate([a["gap"], b["gap"]]),
+        )
+
+    @property
+    def admissible(self) -> np.ndarray:
+        return np.isfinite(self.work) & np.isfinite(self.margin) & (self.gap <= 0)
+
+    def most_stable(self) -> np.ndarray:
+        """Admissible individuals, largest margin first."""
+        ok = np.flatnonzero(self.admissible)
+        return ok[np.argsort(-self.margin[ok], kind="stable")]
+
+    def least_work(self, required: float) -> np.ndarray:
+        """Admissible individuals of margin ≥ ``required``, least work first."""
+        ok = np.flatnonzero(self.admissible & (self.margin >= required))
+        return ok[np.argsort(self.work[ok], kind="stable")]
+
+
+def _choose(cell, gait, pool, order, fallback, required, record_dir, simulate) -> dict:
+    """The columns of ``gait``: the first of ``order`` that can be planned at 1 ms, played.
+
+    The GA samples a walk at 100 points per step; a gait whose legs are straight at
+    those points may overreach between them, which a 1 ms plan finds
+    (``UnreachableError``): the next candidate is taken, up to ``MAX_REPLANS``. With
+    no candidate (nothing admissible, or nothing of the required margin) the
+    search's own best is reported, ``found`` False, and not played.
+    """
+    from planner.errors import UnreachableError
+
+    failures = []
+    for i in order[:MAX_REPLANS]:
+        x, margin = pool.X[i], float(pool.margin[i])
+        found = margin >= (required if gait == "minwork" else 0.0)
+        columns = _gait_columns(gait, x, float(pool.work[i]), margin, found)
+        record = record_dir if gait == "maxmargin" and simulate else None
+        try:
+            return columns | _play(cell, gait, x, record, simulate)
+        except UnreachableError as err:
+            failures.append(one_line(err))
+    best_margin = fallback.margin + (required if gait == "minwork" else 0.0)
+    columns = _gait_columns(gait, fallback.x, fallback.work, best_margin, False)
+    if failures:
+        columns["error"] = (
+            f"{gait}: none of the {len(failures)} best gaits plans at 1 ms ({failures[0]})"
+        )
+    return columns
+
+
+def _gait_columns(gait: str, x, work: float, margin: float, found: bool) -> dict:
+    return {
+        f"{gait}_found": bool(found),
+        f"{gait}_margin_mm": margin * 1e3,
+        f"{gait}_work_J": work,
+        f"{gait}_hip_height_m": float(x[0]),
+        f"{gait}_swing_lift_m": float(x[1]),
+        f"{gait}_tilt_deg": float(np.rad2deg(x[2])),
+    }
 
 
 def _play(cell: EnvelopeCell, gait: str, x, record_dir: str | None, simulate: bool) -> dict:

@@ -6,6 +6,7 @@ import subprocess
 import sys
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from bench.cli import main
@@ -195,3 +196,35 @@ def test_convergence_counts_flips_and_the_largest_margin_change(tmp_path):
     flipped = table("c.csv", bigger, [2.4, 0.5], [True, True], [False, True])
     check = compare_budgets(small, flipped, base, bigger)
     assert (check.flips, check.found_flips) == (1, 1) and check.max_change_mm == 30.5
+
+
+def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
+    """The GA's best may be reachable at its samples only; the next best that plans is taken."""
+    from bench.experiments.envelope_cell import _choose, _Pool
+    from planner.errors import UnreachableError
+    from planner.plan import plan_walk
+
+    config = envelope_from_dict({"grid": {"step_time": [1.0], "slope": [0]}}, base_dir=tmp_path)
+    cell = config.cells[0]
+    straight = [0.2491, 0.005, 0.0]  # the legs straight: out of reach during the walk
+    nominal = [0.20, 0.0666, 0.2094]
+    with pytest.raises(UnreachableError):
+        plan_walk(cell.spec, cell.gait(straight))
+    pool = _Pool(
+        X=np.array([straight, nominal]),
+        work=np.array([0.5, 0.8]),
+        margin=np.array([0.009, 0.001]),
+        gap=np.array([-0.1, -0.1]),
+    )
+    columns = _choose(cell, "maxmargin", pool, pool.most_stable(), None, 0.005, None, False)
+    assert columns["maxmargin_hip_height_m"] == 0.20 and columns["maxmargin_found"]
+    assert columns["maxmargin_margin_mm"] == pytest.approx(1.0)
+    assert "maxmargin_margin_1ms_mm" in columns and "error" not in columns
+
+
+def test_rows_are_found_by_their_id_as_written(tmp_path):
+    from bench.experiments.envelope import _by_id
+
+    path = tmp_path / "e.csv"
+    path.write_bytes(ENVELOPE.header + ENVELOPE.format_row({"cell_id": "123456789012"}))
+    assert list(_by_id(path)) == ["123456789012"]  # not the number 123456789012.0
