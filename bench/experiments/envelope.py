@@ -25,7 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from bench.experiments.batch import Batch, duration, run_batch
-from bench.experiments.envelope_cell import ENVELOPE, error_row, run_cell, run_cell_search
+from bench.experiments.envelope_cell import (
+    ENVELOPE,
+    error_row,
+    is_failure,
+    run_cell,
+    run_cell_search,
+)
 from bench.experiments.envelope_config import EnvelopeConfig
 
 RECORDINGS_DIR = "recordings"
@@ -36,7 +42,7 @@ CONVERGENCE_FACTOR = 4
 
 
 def _is_error(row: dict) -> bool:
-    return bool(row.get("error")) and not str(row["error"]).startswith("recording failed")
+    return is_failure(row.get("error"))
 
 
 def _batch(name: str, fn, source: str) -> Batch:

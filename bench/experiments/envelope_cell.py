@@ -47,7 +47,10 @@ from planner.spec import RobotSpec
 
 FAMILIES = ("paper",)  # (Hz, Szmax, θ1max), planner/gait_search.py
 GAITS = ("maxmargin", "minwork")
-MAX_REPLANS = 8  # candidates tried per gait when the best cannot be planned at 1 ms
+MAX_REPLANS = 256  # distinct candidates tried per gait when the best cannot be planned at 1 ms
+DENSE = 32  # of them, the best ones tried in order before the ranking is sampled
+AGREEMENT_TOL = 1e-6  # [m] a 1 ms plan's margin may not fall further below the GA's
+REPLAN_NOTE = "not re-plannable:"  # the error of a gait passed over, not of a failed cell
 GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
                 "swing_lift_m", "tilt_deg")  # fmt: skip
 
@@ -212,6 +215,12 @@ class _Shifted:
         return Measurement(m.work, m.margin - self.required, m.joint_gap)
 
 
+def is_failure(error) -> bool:
+    """Whether a row's ``error`` is a failed cell (not a recording or re-plan note)."""
+    text = str(error or "")
+    return bool(text) and not text.startswith(("recording failed", REPLAN_NOTE))
+
+
 def error_row(cell: EnvelopeCell, cause: str) -> dict:
     """The row of a cell that raised or killed its worker."""
     verdicts = {sim_columns(g, m)[0]: "error" for g in GAITS for m in cell.modes}
@@ -307,29 +316,58 @@ def _choose(cell, gait, pool, order, fallback, required, record_dir, simulate) -
 
     The GA samples a walk at 100 points per step; a gait whose legs are straight at
     those points may overreach between them, which a 1 ms plan finds
-    (``UnreachableError``): the next candidate is taken, up to ``MAX_REPLANS``. With
+    (``UnreachableError``), or pass so near the straight knee that the 1 ms plan's
+    joint accelerations, and with them its ZMP, are not what the GA scored (its 1 ms
+    margin falls below the GA's, which it never may: ``plan.py``). Such a gait is
+    passed over for the next candidate (``_spread``): the gait reported is the best of
+    those tried that plans as the GA scored it. With
     no candidate (nothing admissible, or nothing of the required margin) the
     search's own best is reported, ``found`` False, and not played.
     """
     from planner.errors import UnreachableError
+    from planner.plan import plan_walk
 
     failures = []
-    for i in order[:MAX_REPLANS]:
+    for i in _spread(order, pool.X):
         x, margin = pool.X[i], float(pool.margin[i])
-        found = margin >= (required if gait == "minwork" else 0.0)
-        columns = _gait_columns(gait, x, float(pool.work[i]), margin, found)
-        record = record_dir if gait == "maxmargin" and simulate else None
         try:
-            return columns | _play(cell, gait, x, record, simulate)
+            plan = plan_walk(cell.spec, cell.gait(x))
         except UnreachableError as err:
             failures.append(one_line(err))
+            continue
+        fine = float(plan.margin.min())
+        if fine < margin - AGREEMENT_TOL:
+            failures.append(
+                f"re-planned at 1 ms its margin is {fine * 1e3:.1f} mm, not {margin * 1e3:.1f}"
+            )
+            continue
+        found = margin >= (required if gait == "minwork" else 0.0)
+        columns = _gait_columns(gait, x, float(pool.work[i]), margin, found)
+        columns[f"{gait}_margin_1ms_mm"] = fine * 1e3
+        if simulate:
+            columns |= _play(cell, gait, plan, record_dir if gait == "maxmargin" else None)
+        return columns
     best_margin = fallback.margin + (required if gait == "minwork" else 0.0)
     columns = _gait_columns(gait, fallback.x, fallback.work, best_margin, False)
     if failures:
         columns["error"] = (
-            f"{gait}: none of the {len(failures)} best gaits plans at 1 ms ({failures[0]})"
+            f"{REPLAN_NOTE} {gait}: none of the {len(failures)} best distinct gaits plans at "
+            f"1 ms as scored ({failures[0]})"
         )
     return columns
+
+
+def _spread(order: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """At most ``MAX_REPLANS`` distinct candidates of ``order``: its first ``DENSE`` in
+    order, then ranks spaced geometrically down the rest (a GA converged on a
+    straight-leg corner holds hundreds of near copies of it: the next plannable gait
+    may lie far down the ranking)."""
+    _, first = np.unique(X[order], axis=0, return_index=True)
+    distinct = order[np.sort(first)]
+    if distinct.size <= MAX_REPLANS:
+        return distinct
+    ranks = np.geomspace(DENSE, distinct.size - 1, MAX_REPLANS - DENSE).astype(int)
+    return distinct[np.unique(np.concatenate([np.arange(DENSE), ranks]))]
 
 
 def _gait_columns(gait: str, x, work: float, margin: float, found: bool) -> dict:
@@ -343,18 +381,13 @@ def _gait_columns(gait: str, x, work: float, margin: float, found: bool) -> dict
     }
 
 
-def _play(cell: EnvelopeCell, gait: str, x, record_dir: str | None, simulate: bool) -> dict:
-    """Plan ``x`` at 1 ms and play it in every mode of the cell: its columns."""
+def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
+    """Play a 1 ms ``plan`` in every mode of the cell: its verdict and ZMP RMS columns."""
     from bench.sim.trial import TrialSpec, run_trial
-    from planner.plan import plan_walk
 
-    params = cell.gait(x)
-    plan = plan_walk(cell.spec, params)
-    out = {f"{gait}_margin_1ms_mm": float(plan.margin.min()) * 1e3}
-    if not simulate:
-        return out
+    out = {}
     for i, mode in enumerate(cell.modes):
-        trial = TrialSpec(params, friction=cell.friction, actuators=mode, timestep=TIMESTEP)
+        trial = TrialSpec(plan.params, friction=cell.friction, actuators=mode, timestep=TIMESTEP)
         result = run_trial(cell.spec, trial, plan=plan)
         verdict, rms = sim_columns(gait, mode)
         out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}

@@ -10,6 +10,7 @@ Numbers at fixed precision, as in ``claims.py``.
 
 from __future__ import annotations
 
+from bench.experiments.envelope_cell import is_failure
 from bench.sim.model import ACTUATOR_MODES
 
 NOMINAL_STEP_TIME = 1.0  # [s]
@@ -20,7 +21,7 @@ def _paper(rows) -> list[dict]:
         r
         for r in rows
         if r["family"] == "paper" and r["friction"] == 1.0 and r["robot"] == "default"
-        if not r["error"] or str(r["error"]).startswith("recording failed")
+        if not is_failure(r["error"])
     ]
 
 

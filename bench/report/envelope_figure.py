@@ -28,6 +28,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import TwoSlopeNorm  # noqa: E402
 
+from bench.experiments.envelope_cell import is_failure  # noqa: E402
 from bench.experiments.sweep_table import read_table  # noqa: E402
 from bench.files import atomic_path  # noqa: E402
 from bench.sim.model import ACTUATOR_MODES  # noqa: E402
@@ -52,7 +53,7 @@ def grids(rows: list[dict], family: str) -> tuple[list, list, dict]:
     out |= {f"walks_{m}": np.full(shape, np.nan) for m in modes}
     for r in rows:
         i, j = times.index(r["step_time"]), slopes.index(r["slope_deg"])
-        if r["error"] and not str(r["error"]).startswith("recording failed"):
+        if is_failure(r["error"]):
             continue
         margin = r["maxmargin_margin_mm"]
         out["margin"][i, j] = margin if isinstance(margin, float) else np.nan

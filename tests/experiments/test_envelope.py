@@ -213,12 +213,12 @@ def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
     pool = _Pool(
         X=np.array([straight, nominal]),
         work=np.array([0.5, 0.8]),
-        margin=np.array([0.009, 0.001]),
+        margin=np.array([0.009, 0.0005]),  # the nominal gait's 1 ms margin is 0.85 mm
         gap=np.array([-0.1, -0.1]),
     )
     columns = _choose(cell, "maxmargin", pool, pool.most_stable(), None, 0.005, None, False)
     assert columns["maxmargin_hip_height_m"] == 0.20 and columns["maxmargin_found"]
-    assert columns["maxmargin_margin_mm"] == pytest.approx(1.0)
+    assert columns["maxmargin_margin_mm"] == pytest.approx(0.5)
     assert "maxmargin_margin_1ms_mm" in columns and "error" not in columns
 
 
