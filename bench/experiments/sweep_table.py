@@ -164,11 +164,6 @@ class TableFormat:
     def header(self) -> bytes:
         return _header(self.columns)
 
-    @property
-    def article(self) -> str:
-        """ "a sweep", "an envelope"."""
-        return f"{'an' if self.kind[0] in 'aeiou' else 'a'} {self.kind}"
-
     def _previous_layout(self, data: bytes) -> tuple[str, ...] | None:
         first = data.split(b"\n", 1)[0] + b"\n"
         return next((c for c in self.previous_layouts if _header(c) == first), None)
