@@ -69,7 +69,7 @@ def _outcome(row: dict) -> str:
         f", margin {margin:.1f} mm" if isinstance(margin, float) else ""
     )
     played = [
-        f"{k.split('_')[1]} {v}"
+        f"{k.removeprefix('maxmargin_').removesuffix('_verdict')} {v}"
         for k, v in row.items()
         if k.startswith("maxmargin_")
         if k.endswith("_verdict") and v
