@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from planner.compliance import compliant_walk
+from planner.joints import JOINT_NAMES
 from planner.plan import plan_walk
 from planner.trajectory import GaitParams
 from planner.verdict import (
@@ -13,6 +14,7 @@ from planner.verdict import (
     PredictedEvent,
     planned_slide,
     predict,
+    saturation_events,
     slip_events,
     verdict,
 )
@@ -77,3 +79,21 @@ def test_a_sagging_servo_strikes_the_plane(spec):
     fed = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, feedforward=plan.tau)
     held = predict(plan, friction=1.0, walk=fed, stiffness=spec.stiffness)
     assert "strike" not in [e.kind for e in held.events]
+
+
+def test_saturation_names_the_first_sample_and_the_neediest_joint(spec, plan):
+    """A servo limit at 80 % of the walk's peak loop torque: the event sits at the first
+    sample where any joint needs more than the limit, and names the joint whose peak is
+    highest; a limit above the peak predicts nothing. The reference is a plain loop."""
+    damping = spec.stall_torque / spec.no_load_speed
+    walk = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, armature=spec.armature)
+    need = np.abs(walk.loop_torque)  # (n, 8) [N m]
+    peak = need.max(axis=0)
+    limit = 0.8 * peak.max()
+    first = next(k for k in range(len(need)) if any(need[k, j] > limit for j in range(8)))
+    neediest = max(range(8), key=lambda j: peak[j])
+    (event,) = saturation_events(walk, limit)
+    assert event.kind == "saturation"
+    assert event.time == pytest.approx(plan.t[first])
+    assert event.cause.startswith(f"{JOINT_NAMES[neediest]} needs {peak[neediest]:.2f} N m")
+    assert saturation_events(walk, 1.01 * peak.max()) == []
