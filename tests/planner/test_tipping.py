@@ -49,6 +49,18 @@ def test_edge_inertia_obeys_the_parallel_axis_theorem(spec):
     assert np.all(at_com > spec.total_mass * com[:, 2] ** 2)
 
 
+def test_edge_inertia_is_the_same_from_any_point_of_the_line(spec):
+    """The line is fixed by one point and its direction: sliding the point 0.3 m along the
+    line (both in-plane directions, oblique too) leaves the moment of inertia unchanged."""
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
+    rows = np.array([100, 400, 700])
+    direction = np.array([[1.0, 0.0], [0.0, 1.0], [0.6, 0.8]])
+    point = np.array([[0.02, -0.05], [0.1, 0.03], [-0.04, 0.06]])
+    here = edge_inertia(plan, rows, point, direction)
+    there = edge_inertia(plan, rows, point + 0.3 * direction, direction)
+    np.testing.assert_allclose(there, here, rtol=1e-9)
+
+
 def test_nearest_edge_of_a_square():
     square = np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]])
     point, direction = nearest_edge(np.array([[0.5, -0.2]]), square)
