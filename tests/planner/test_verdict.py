@@ -8,6 +8,7 @@ import pytest
 from planner.compliance import compliant_walk
 from planner.joints import JOINT_NAMES
 from planner.plan import plan_walk
+from planner.tipping import excursion_integral
 from planner.trajectory import GaitParams
 from planner.verdict import (
     SLIP_DISTANCE,
@@ -56,6 +57,22 @@ def test_slip_needs_the_excess_friction_long_enough(plan):
     events, slide = slip_events(plan, friction=0.2 * need)
     assert events and events[0].kind == "slip"
     assert slide.max() > SLIP_DISTANCE
+
+
+def test_slip_slide_is_driven_by_the_in_plane_force_beyond_mu_n(spec, plan):
+    """The slide is the excursion driven by |F_xy| − μ F_z (both in-plane axes of the
+    ground force, per row); the event is at its first sample past 5 mm and quotes the
+    largest slide in mm."""
+    friction = 0.2 * plan.friction_ratio.max()
+    f = plan.ground_force
+    excess = np.array([np.sqrt(x * x + y * y) - friction * max(z, 0.0) for x, y, z in f])
+    expected = excursion_integral(plan.t, excess, spec.total_mass)
+    (event,), slide = slip_events(plan, friction)
+    np.testing.assert_allclose(slide, expected, rtol=1e-9, atol=1e-12)
+    first = next(k for k in range(len(expected)) if expected[k] > SLIP_DISTANCE)
+    assert event.time == pytest.approx(plan.t[first])
+    assert f"slides the feet {expected.max() * 1e3:.1f} mm (threshold 5 mm)" in event.cause
+    assert event.cause.startswith(f"friction ratio {np.nanmax(plan.friction_ratio):.3f} > mu")
 
 
 def test_verdict_is_the_most_severe_event():
