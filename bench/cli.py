@@ -21,6 +21,7 @@ from bench.flags import (
     WORKERS,
     Formatter,
     Parser,
+    add_batch_flags,
     add_gait_flags,
     add_robot_flag,
     add_sim_flags,
@@ -256,34 +257,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="CONFIG",
         help="sweep TOML (default: bench/experiments/sweeps/paper.toml, the paper's sweep)",
     )
-    p.add_argument(
-        "--out",
-        metavar="DIR",
-        help="output directory: sweep.csv, recordings/ (default: ./results, the "
+    add_batch_flags(
+        p,
+        out_help="output directory: sweep.csv, recordings/ (default: ./results, the "
         "repository's results/ when run from its root)",
-    )
-    p.add_argument(
-        "--workers",
-        type=integer(WORKERS),
-        metavar="N",
-        help=f"local worker processes, in {WORKERS} (default: all cores); ignored with --cluster",
-    )
-    p.add_argument(
-        "--cluster",
-        metavar="ADDRESS",
-        help="run on a Dask distributed scheduler, e.g. tcp://host:8786 (workers need "
-        "slopewalk installed)",
-    )
-    p.add_argument(
-        "--resume",
-        action="store_true",
-        help="count the trials already in DIR (an unfinished run, or a finished sweep.csv) as "
-        "done and play the rest",
-    )
-    p.add_argument(
-        "--record",
-        action="store_true",
-        help="also write DIR/recordings/<trial_id>.rrd per trial (rerun)",
+        resume_help="count the trials already in DIR (an unfinished run, or a finished "
+        "sweep.csv) as done and play the rest",
+        record_help="also write DIR/recordings/<trial_id>.rrd per trial (rerun)",
     )
     p.add_argument(
         "--report",
@@ -362,32 +342,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="CONFIG",
         help="envelope TOML (default: bench/experiments/envelopes/paper.toml)",
     )
-    p.add_argument(
-        "--out",
-        metavar="DIR",
-        help="output directory: envelope.csv, envelope.png, recordings/ (default: "
+    add_batch_flags(
+        p,
+        out_help="output directory: envelope.csv, envelope.png, recordings/ (default: "
         "./results/envelope)",
-    )
-    p.add_argument(
-        "--workers",
-        type=integer(WORKERS),
-        metavar="N",
-        help=f"local worker processes, in {WORKERS} (default: all cores); ignored with --cluster",
-    )
-    p.add_argument(
-        "--cluster",
-        metavar="ADDRESS",
-        help="run on a Dask distributed scheduler, e.g. tcp://host:8786",
-    )
-    p.add_argument(
-        "--resume",
-        action="store_true",
-        help="count the cells already in DIR as done and run the rest",
-    )
-    p.add_argument(
-        "--record",
-        action="store_true",
-        help="also write DIR/recordings/<cell_id>.rrd per cell (the max-margin gait, first mode)",
+        resume_help="count the cells already in DIR as done and run the rest",
+        record_help="also write DIR/recordings/<cell_id>.rrd per cell (the max-margin gait, "
+        "first mode)",
     )
     p.add_argument(
         "--convergence",

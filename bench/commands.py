@@ -8,6 +8,7 @@ radians inside.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
@@ -235,53 +236,80 @@ def compare(args) -> None:
 
 
 def sweep(args) -> None:
-    import contextlib
     from pathlib import Path
 
-    from bench.experiments.sweep import Stopped, open_cluster, run_sweep
+    from bench.experiments.sweep import run_sweep
     from bench.experiments.sweep_config import SweepError, load_sweep
 
     config = load_sweep(args.config)  # the whole file is checked before anything runs
-    if args.record:
-        try:
-            import bench.report.recording  # noqa: F401
-        except ImportError as err:
-            raise SweepError(f"--record: recordings are unavailable ({err})") from None
-    out = Path(args.out) if args.out is not None else Path.cwd() / "results"
-    check_output_dir(out)  # before any trial runs
-    resume = True if args.resume else None if args.out is not None else False
-    try:
-        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
-            summary = run_sweep(
-                config,
-                out,
-                workers=args.workers,
-                executor=executor,
-                resume=resume,
-                record=args.record,
-                progress=sys.stderr.isatty(),
-            )
-    except Stopped as stop:
-        print(f"slopewalk: {stop.message}", file=sys.stderr)
-        raise SystemExit(128 + stop.signum) from None
+    out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
+    with _batch_executor(args) as executor:
+        summary = run_sweep(
+            config,
+            out,
+            workers=args.workers,
+            executor=executor,
+            resume=resume,
+            record=args.record,
+            progress=sys.stderr.isatty(),
+        )
     print("\n".join(summary.lines()))
     if summary.lost:
         raise SweepError(f"{len(summary.lost)} trials lost with their workers; add --resume")
     if args.config is None or args.report:
-        from bench.experiments.sweep_table import read_table
-        from bench.report.claims import ga_claims, write_report
-        from planner.spec import load_spec
+        envelope = out / "envelope" / "envelope.csv"
+        _write_claims(out, summary.table, envelope if envelope.exists() else None)
 
-        spec = load_spec()
-        table = out / "envelope" / "envelope.csv"
-        written = write_report(
-            out,
-            read_table(summary.table),
-            spec,
-            ga_claims(out / "optimize", spec),
-            envelope=(read_table(table), table.relative_to(out)) if table.exists() else None,
-        )
-        print("wrote " + ", ".join(str(p.name) for p in written))
+
+def _batch_start(args, default_out, error: type[SlopewalkError]):
+    """What ``sweep`` and ``envelope`` check before any job runs: ``--record`` can
+    record, the output folder can be written. Returns (out, resume): ``resume`` is
+    True with ``--resume``, None (resume an unfinished run found there) when ``--out``
+    names the folder, False (a fresh run) for the default folder."""
+    from pathlib import Path
+
+    if args.record:
+        try:
+            import bench.report.recording  # noqa: F401
+        except ImportError as err:
+            raise error(f"--record: recordings are unavailable ({err})") from None
+    out = Path(args.out) if args.out is not None else default_out
+    check_output_dir(out)
+    return out, True if args.resume else None if args.out is not None else False
+
+
+@contextlib.contextmanager
+def _batch_executor(args):
+    """The Dask cluster of ``--cluster`` (None: local workers) for a resumable run;
+    SIGINT or SIGTERM of the run exits with 128 + the signal, its message on stderr."""
+    from bench.experiments.batch import Stopped
+    from bench.experiments.sweep import open_cluster
+
+    try:
+        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
+            yield executor
+    except Stopped as stop:
+        print(f"slopewalk: {stop.message}", file=sys.stderr)
+        raise SystemExit(128 + stop.signum) from None
+
+
+def _write_claims(results, sweep_table, envelope_table) -> None:
+    """Write the claims table, confusion table and figures into ``results`` from the
+    sweep's table, with the envelope's claims when ``envelope_table`` is not None."""
+    from bench.experiments.sweep_table import read_table
+    from bench.report.claims import ga_claims, write_report
+    from planner.spec import load_spec
+
+    spec = load_spec()
+    envelope = envelope_table and (read_table(envelope_table), envelope_table.relative_to(results))
+    written = write_report(
+        results,
+        read_table(sweep_table),
+        spec,
+        ga_claims(results / "optimize", spec),
+        envelope=envelope,
+    )
+    print("wrote " + ", ".join(str(p.name) for p in written))
 
 
 def controllers(args) -> None:
@@ -309,73 +337,45 @@ def controllers(args) -> None:
 
 
 def envelope(args) -> None:
-    import contextlib
     from pathlib import Path
 
-    from bench.experiments.batch import Stopped
     from bench.experiments.envelope import run_convergence, run_envelope, write_convergence
     from bench.experiments.envelope_config import EnvelopeError, load_envelope
-    from bench.experiments.sweep import open_cluster
 
     config = load_envelope(args.config)  # the whole file is checked before anything runs
-    if args.record:
-        try:
-            import bench.report.recording  # noqa: F401
-        except ImportError as err:
-            raise EnvelopeError(f"--record: recordings are unavailable ({err})") from None
-    out = Path(args.out) if args.out is not None else Path.cwd() / "results" / "envelope"
-    check_output_dir(out)  # before any cell runs
-    resume = True if args.resume else None if args.out is not None else False
+    out, resume = _batch_start(args, Path.cwd() / "results" / "envelope", EnvelopeError)
     progress = sys.stderr.isatty()
-    try:
-        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
-            summary = run_envelope(
-                config,
-                out,
-                workers=args.workers,
-                executor=executor,
-                resume=resume,
-                record=args.record,
-                progress=progress,
-            )
-            print("\n".join(summary.lines()))
-            if summary.lost:
-                raise EnvelopeError(
-                    f"{len(summary.lost)} cells lost with their workers; add --resume"
-                )
-            if args.convergence:
-                check = run_convergence(
-                    config, summary.table, out, workers=args.workers, executor=executor,
-                    resume=resume, progress=progress,
-                )  # fmt: skip
-                print("\n".join(check.lines()))
-                print(f"wrote {write_convergence(check, config, out)}")
-    except Stopped as stop:
-        print(f"slopewalk: {stop.message}", file=sys.stderr)
-        raise SystemExit(128 + stop.signum) from None
+    with _batch_executor(args) as executor:
+        summary = run_envelope(
+            config,
+            out,
+            workers=args.workers,
+            executor=executor,
+            resume=resume,
+            record=args.record,
+            progress=progress,
+        )
+        print("\n".join(summary.lines()))
+        if summary.lost:
+            raise EnvelopeError(f"{len(summary.lost)} cells lost with their workers; add --resume")
+        if args.convergence:
+            check = run_convergence(
+                config, summary.table, out, workers=args.workers, executor=executor,
+                resume=resume, progress=progress,
+            )  # fmt: skip
+            print("\n".join(check.lines()))
+            print(f"wrote {write_convergence(check, config, out)}")
     if args.config is None or args.report:
         _envelope_report(out, summary.table)
 
 
 def _envelope_report(out, table) -> None:
     """Rewrite the claims table of the sweep beside ``out`` with the envelope's claims."""
-    from bench.experiments.sweep_table import read_table
-    from bench.report.claims import ga_claims, write_report
-    from planner.spec import load_spec
-
     results = out.parent
     if not (results / "sweep.csv").exists():
         print(f"claims not rewritten: no {results / 'sweep.csv'} (run 'slopewalk sweep' first)")
         return
-    spec = load_spec()
-    written = write_report(
-        results,
-        read_table(results / "sweep.csv"),
-        spec,
-        ga_claims(results / "optimize", spec),
-        envelope=(read_table(table), table.relative_to(results)),
-    )
-    print("wrote " + ", ".join(str(p.name) for p in written))
+    _write_claims(results, results / "sweep.csv", table)
 
 
 def benchmark(args) -> None:

@@ -159,3 +159,25 @@ def add_sim_flags(p: argparse.ArgumentParser) -> None:
         help="stiff: tracks the plan closely; servo: the spec's servo gains and limit; "
         "_ff: the plan's torque fed forward",
     )
+
+
+def add_batch_flags(
+    p: argparse.ArgumentParser, *, out_help: str, resume_help: str, record_help: str
+) -> None:
+    """The flags of a resumable parallel run (``sweep``, ``envelope``): where it writes,
+    on what it runs, whether it resumes, whether it records."""
+    p.add_argument("--out", metavar="DIR", help=out_help)
+    p.add_argument(
+        "--workers",
+        type=integer(WORKERS),
+        metavar="N",
+        help=f"local worker processes, in {WORKERS} (default: all cores); ignored with --cluster",
+    )
+    p.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="run on a Dask distributed scheduler, e.g. tcp://host:8786 (workers need "
+        "slopewalk installed)",
+    )
+    p.add_argument("--resume", action="store_true", help=resume_help)
+    p.add_argument("--record", action="store_true", help=record_help)
