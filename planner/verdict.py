@@ -92,18 +92,16 @@ def joint_limit_events(plan) -> list[PredictedEvent]:
 def tip_events(plan, margin=None, zmp=None) -> tuple[list[PredictedEvent], np.ndarray]:
     """``tip`` where the rotation about the support edge passes TIP_ANGLE; and the rotation."""
     theta = foot_rotation(plan, margin, zmp)
-    over = np.flatnonzero(theta > TIP_ANGLE)
-    if not over.size:
-        return [], theta
-    k = over[0]
-    return [
-        PredictedEvent(
-            float(plan.t[k]),
-            "tip",
+    return _first_past(
+        plan.t,
+        theta,
+        TIP_ANGLE,
+        "tip",
+        lambda: (
             f"support turns {np.rad2deg(theta.max()):.1f} deg about its edge "
-            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg) while the ZMP is outside",
-        )
-    ], theta
+            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg) while the ZMP is outside"
+        ),
+    ), theta
 
 
 def slip_events(plan, friction: float) -> tuple[list[PredictedEvent], np.ndarray]:
@@ -113,18 +111,23 @@ def slip_events(plan, friction: float) -> tuple[list[PredictedEvent], np.ndarray
     normal = np.maximum(force[:, 2], 0.0)
     excess = tangential - friction * normal
     slide = excursion_integral(plan.t, excess, plan.spec.total_mass)
-    over = np.flatnonzero(slide > SLIP_DISTANCE)
-    if not over.size:
-        return [], slide
-    k = over[0]
-    return [
-        PredictedEvent(
-            float(plan.t[k]),
-            "slip",
-            f"friction ratio {np.nanmax(plan.friction_ratio):.3f} > mu {friction:g} slides "
-            f"the feet {slide.max() * 1e3:.1f} mm (threshold {SLIP_DISTANCE * 1e3:g} mm)",
-        )
-    ], slide
+    return _first_past(
+        plan.t,
+        slide,
+        SLIP_DISTANCE,
+        "slip",
+        lambda: (
+            f"friction ratio {np.nanmax(plan.friction_ratio):.3f} > mu {friction:g} "
+            f"slides the feet {slide.max() * 1e3:.1f} mm (threshold {SLIP_DISTANCE * 1e3:g} mm)"
+        ),
+    ), slide
+
+
+def _first_past(t, series, threshold: float, kind: str, describe) -> list[PredictedEvent]:
+    """One ``kind`` event at the first sample where ``series`` exceeds ``threshold``
+    (none if it never does); ``describe()`` gives its cause line."""
+    over = np.flatnonzero(series > threshold)
+    return [PredictedEvent(float(t[over[0]]), kind, describe())] if over.size else []
 
 
 def foot_slide_events(plan) -> list[PredictedEvent]:
@@ -169,19 +172,18 @@ def strike_events(walk, stiffness: float) -> list[PredictedEvent]:
     """
     plan = walk.plan
     theta = strike_roll(plan, stiffness)
-    over = np.flatnonzero(theta > TIP_ANGLE)
-    if not over.size:
-        return []
-    k = over[0]
-    return [
-        PredictedEvent(
-            float(plan.t[k]),
-            "strike",
-            f"the sagging servos put the swing sole {-plan.swing_sole[:, 2].min() * 1e3:.1f} mm "
-            f"into the plane in single support: it props the robot up and turns the stance "
-            f"foot {np.rad2deg(theta.max()):.1f} deg (tip angle {np.rad2deg(TIP_ANGLE):g} deg)",
-        )
-    ]
+    return _first_past(
+        plan.t,
+        theta,
+        TIP_ANGLE,
+        "strike",
+        lambda: (
+            f"the sagging servos put the swing sole "
+            f"{-plan.swing_sole[:, 2].min() * 1e3:.1f} mm into the plane in single support: it "
+            f"props the robot up and turns the stance foot {np.rad2deg(theta.max()):.1f} deg "
+            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
+        ),
+    )
 
 
 @dataclass(frozen=True)
