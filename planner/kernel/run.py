@@ -44,14 +44,20 @@ _LAUNCH = threading.Lock()
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _footprints(landing, tilt, hip_width):
-    """y of each step's stance sole [m] (``trajectory.footprint_y``), shape (N,)."""
-    n = landing.size
+def _footprints(landing, x, hip_width):
+    """y of each step's stance sole [m] (``trajectory.footprint_y``), shape (N,).
+
+    ``landing``: λ per unit tilt at each touch-down of the hold and sway profiles,
+    (2, N); the individual's lean blends them by its sway share.
+    """
+    n = landing.shape[1]
+    tilt, w = x[tb.TILT_X], x[tb.SWAY_SHARE]
     y = np.empty(n)
     y[0] = -hip_width / 2
     for k in range(1, n):
         towards = 1.0 if (k - 1) % 2 == 0 else -1.0
-        y[k] = y[k - 1] + towards * hip_width / np.cos(tilt * landing[k - 1])
+        lean = landing[0, k - 1] + w * (landing[1, k - 1] - landing[0, k - 1])
+        y[k] = y[k - 1] + towards * hip_width / np.cos(tilt * lean)
     return y
 
 
@@ -69,7 +75,7 @@ def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, 
     for task in prange(P * blocks):
         p, b = task // blocks, task % blocks
         work = np.empty((sm.SCRATCH, 16))
-        y = _footprints(landing, X[p, 2], geometry[tb.HIP_WIDTH])
+        y = _footprints(landing, X[p], geometry[tb.HIP_WIDTH])
         for j in range(b * size, min(n, (b + 1) * size)):
             sm.evaluate_sample(
                 pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, X[p],
@@ -191,7 +197,7 @@ def scores(
         margin = np.empty(n)
         power = np.empty(n)
         x = X[p]
-        y = _footprints(landing, x[2], geometry[tb.HIP_WIDTH])
+        y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
         gap = -np.inf
         bad = False
         for j in range(n):
@@ -265,8 +271,12 @@ class KernelWalk:
         )  # fmt: skip
 
     def series(self, slope: float, X) -> np.ndarray:
-        """Rows (``sample`` layout) at the grid samples, shape (P, n, ROW)."""
-        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        """Rows (``sample`` layout) at the grid samples, shape (P, n, ROW).
+
+        X: the population, (P, 3) (paper family) or (P, 6) (``tables.COLUMNS``), as
+        ``tables.GaitTable.individuals`` reads it.
+        """
+        X = self.gait.individuals(X)
         with _LAUNCH:
             return series(*self._args(slope), X, *self.grid)
 
@@ -274,11 +284,12 @@ class KernelWalk:
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
 
         Args:
+            X: The population, (P, 3) or (P, 6) (``tables.GaitTable.individuals``).
             samples: "limit" (the GA's: grid plus one-sided limits) or "grid".
             refine: Refine the margin at every local minimum between samples.
             counts: Also return the samples evaluated per individual, (P,).
         """
-        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        X = self.gait.individuals(X)
         pieces, times = self.limit if samples == "limit" else self.grid
         with _LAUNCH:
             out = scores(*self._args(slope), self.limits, X, pieces, times, refine)

@@ -1,6 +1,6 @@
 """One sample of the analytic pipeline, compiled: gait → IK → FK → Newton-Euler → ZMP → margin.
 
-``evaluate_sample`` computes, for one individual (Hz, Szmax, tilt) at one time of
+``evaluate_sample`` computes, for one individual (``tables.COLUMNS``) at one time of
 one gait piece (``tables.GaitTable``), every series of ``plan.Plan`` at that
 instant and writes it into one row of ``ROW`` floats (layout below). The maths is
 that of the readable modules, written per sample with scalars:
@@ -121,7 +121,8 @@ def evaluate_sample(
         landing_y: y of each step's stance sole for this individual [m], (N,).
         geometry, dh_a, d5, mass, com, inertia: ``ChainTable`` fields.
         gravity: Gravity in S [m/s²], (3,).
-        x: The individual (Hz [m], Szmax [m], tilt [rad]), (3,).
+        x: The individual (``tables.COLUMNS``: Hz [m], Szmax [m], tilt [rad], pelvis
+            offset [m], step length [m], sway share [-]), (6,).
         piece: Piece index; t: time [s] (in or at the ends of the piece).
         row: Output, (ROW,), layout in the module constants.
         work: Scratch, (SCRATCH, 16): rows 0-9 the frames (rotation row-major, then the
@@ -132,14 +133,19 @@ def evaluate_sample(
     side = pi[piece, tb.SIDE]
     l1, l2 = geometry[tb.SHANK], geometry[tb.THIGH]
     lh, lan = geometry[tb.HIP_WIDTH], geometry[tb.ANKLE_HEIGHT]
-    hz, lift, tilt = x[0], x[1], x[2]
+    hz, lift, tilt = x[tb.HZ], x[tb.LIFT_X], x[tb.TILT_X]
+    step, w = x[tb.STEP_LENGTH], x[tb.SWAY_SHARE]
     towards = pf[piece, tb.TOWARDS]
 
     # ---- gait at t (closed form)
     hxp, hxv, hxa = _cubic(pf, piece, tb.HIP_X, tau)
+    hxp, hxv, hxa = step * hxp + x[tb.PELVIS], step * hxv, step * hxa
     sxp, sxv, sxa = _cubic(pf, piece, tb.SWING_X, tau)
+    sxp, sxv, sxa = step * sxp, step * sxv, step * sxa
     lp, lv, la = _cubic(pf, piece, tb.LIFT, tau)
     mp, mv, ma = _cubic(pf, piece, tb.TILT, tau)
+    wp, wv, wa = _cubic(pf, piece, tb.SWAY, tau)
+    mp, mv, ma = mp + w * (wp - mp), mv + w * (wv - mv), ma + w * (wa - ma)
     share = _cubic(pf, piece, tb.SHARE, tau)[0]
     lam, lamv, lama = tilt * mp, tilt * mv, tilt * ma
     sl, cl = np.sin(lam), np.cos(lam)
@@ -164,7 +170,7 @@ def evaluate_sample(
     sth = (sl, -ss, s3, st, st2, s6, ss2, sl)
     # frame 0: columns x0 = z_S, y0 = −y_S, z0 = x_S; origin at the stance ankle
     ys = landing_y[pi[piece, tb.FOOT]]
-    xs = pf[piece, tb.STANCE_X]
+    xs = step * pf[piece, tb.STANCE_X]
     x0, x1, x2 = 0.0, 0.0, 1.0
     y0, y1, y2 = 0.0, -1.0, 0.0
     z0, z1, z2 = 1.0, 0.0, 0.0

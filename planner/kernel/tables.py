@@ -7,11 +7,15 @@ mid-swing, the "sway" tilt too), and the closing DSP. Every knot of every spline
 is a piece boundary, so on a piece each shape is exactly c0 + c1 τ + c2 τ² + c3 τ³
 and the kernel evaluates the gait at any time in closed form.
 
-Shapes (columns ``HIP_X`` … ``SHARE``, each 4 coefficients): hip x relative to
-the stance ankle [m], swing ankle x relative to the stance ankle [m], swing sole
-height per unit lift [-], lean λ per unit tilt [-], and the stance foot's share of
-the ground wrench [-] (``plan._stance_share``). Lengths in metres, times in
-seconds, angles in radians; positions in the slope frame S.
+Shapes (columns ``HIP_X`` … ``SWAY``, each 4 coefficients): hip x relative to
+the stance ankle per unit step length [-], swing ankle x relative to the stance
+ankle per unit step length [-], swing sole height per unit lift [-], lean λ per
+unit tilt of the "hold" profile [-], the stance foot's share of the ground wrench
+[-] (``plan._stance_share``), and λ per unit tilt of the "sway" profile [-]. The
+sagittal shapes are per unit step length because an individual of the extended
+gait family carries its own step length L (every x of the walk is linear in L),
+and both lean profiles are kept because its lean is the blend (1 − w)·hold + w·sway
+(``COLUMNS``). Times in seconds, angles in radians; positions in the slope frame S.
 """
 
 from __future__ import annotations
@@ -28,11 +32,16 @@ from planner.trajectory import Timeline
 
 # float columns of a piece
 T0, T1, STANCE_X, TOWARDS = 0, 1, 2, 3
-HIP_X, SWING_X, LIFT, TILT, SHARE = 4, 8, 12, 16, 20
-PIECE_FLOATS = 24
+HIP_X, SWING_X, LIFT, TILT, SHARE, SWAY = 4, 8, 12, 16, 20, 24
+PIECE_FLOATS = 28
 # int columns of a piece
 STEP, SIDE, SSP, FOOT, PHASE = 0, 1, 2, 3, 4
 PIECE_INTS = 5
+# columns of an individual x: Hz [m], Szmax [m], tilt [rad] (the paper's GA variables),
+# then the extended family's pelvis offset δ [m] (added to the hip's x in S at every
+# instant), step length L [m] and sway share w [-] (lean = (1 − w)·hold + w·sway).
+HZ, LIFT_X, TILT_X, PELVIS, STEP_LENGTH, SWAY_SHARE = range(6)
+COLUMNS = 6
 # geometry vector
 SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH = range(7)
 
@@ -47,38 +56,41 @@ class GaitTable:
     """The walk as pieces (see module doc).
 
     Attributes:
-        floats: Per piece t0, t1 [s], stance x [m], towards-swing sign (+1: the swing
-            hip is at +y_S), then 5 shapes × 4 coefficients, shape (K, 24).
+        floats: Per piece t0, t1 [s], stance x per unit step length [-], towards-swing
+            sign (+1: the swing hip is at +y_S), then 6 shapes × 4 coefficients,
+            shape (K, 28).
         ints: Per piece step index (N = closing DSP), stance side (0 left / 1 right),
             in SSP (0/1), footprint index, phase index, shape (K, 5).
-        landing: λ per unit tilt at each touch-down k = 0..N-1 [-], shape (N,).
+        landing: λ per unit tilt at each touch-down k = 0..N-1 [-] of the "hold" (row
+            0) and "sway" (row 1) profiles, shape (2, N).
         steps: N.
+        default: The timeline's step length [m] and sway share (0 "hold", 1 "sway"):
+            what a 3-column (paper family) individual walks with.
     """
 
     floats: np.ndarray
     ints: np.ndarray
     landing: np.ndarray
     steps: int
+    default: tuple
 
     @classmethod
     def of(cls, timeline: Timeline) -> GaitTable:
-        T, N, L = timeline.step_time, timeline.steps, timeline.step_length
+        T, N = timeline.step_time, timeline.steps
         dsp, ssp = timeline.dsp_time, timeline.ssp_fraction * timeline.step_time
         end = timeline.t[-1]
-        hip = CubicSpline(
+        hip = CubicSpline(  # per unit step length
             np.append(np.arange(N) * T, end),
-            np.append((2 * np.arange(N) - 1) * L / 4, (2 * N - 1) * L / 4),
+            np.append((2 * np.arange(N) - 1) / 4, (2 * N - 1) / 4),
             bc_type="clamped",
         )
-        swing = CubicSpline([0.0, 0.5, 1.0], [-L / 2, 0.0, L / 2], bc_type="clamped")
+        swing = CubicSpline([0.0, 0.5, 1.0], [-0.5, 0.0, 0.5], bc_type="clamped")
         lift = CubicSpline([0.0, 0.5, 1.0], [0.0, 1.0, 0.0], bc_type="clamped")
         lean = np.where(np.arange(N) % 2 == 0, 1.0, -1.0)
-        sway = None
-        if timeline.tilt_profile == "sway":
-            knots = np.concatenate([[0.0], (np.arange(N) + 1 - timeline.ssp_fraction / 2) * T])
-            sway = CubicSpline(
-                np.append(knots, end), np.concatenate([[0.0], lean, [0.0]]), bc_type="clamped"
-            )
+        knots = np.concatenate([[0.0], (np.arange(N) + 1 - timeline.ssp_fraction / 2) * T])
+        sway = CubicSpline(
+            np.append(knots, end), np.concatenate([[0.0], lean, [0.0]]), bc_type="clamped"
+        )
         rows_f, rows_i = [], []
         for k in range(N + 1):
             start = k * T
@@ -91,7 +103,7 @@ class GaitTable:
                 stance_k = min(k, N - 1)
                 side = RIGHT if stance_k % 2 == 0 else LEFT
                 f[T0], f[T1] = t0, t1
-                f[STANCE_X] = stance_k * L / 2
+                f[STANCE_X] = stance_k / 2
                 f[TOWARDS] = 1.0 if side == RIGHT else -1.0
                 f[HIP_X : HIP_X + 4] = _cubic(lambda t, nu: hip(t, nu), t0, t1)
                 f[HIP_X] -= f[STANCE_X]
@@ -104,7 +116,7 @@ class GaitTable:
                     f[LIFT : LIFT + 4] = _cubic(in_s(lift), t0, t1)
                     f[SHARE] = 1.0
                 else:
-                    f[SWING_X] = -L / 2 if k < N else L / 2
+                    f[SWING_X] = -0.5 if k < N else 0.5
                     smooth = np.array([0.0, 0.0, 3 / dsp**2, -2 / dsp**3])
                     if k == 0:
                         f[SHARE : SHARE + 4] = 0.5 * smooth + [0.5, 0, 0, 0]
@@ -112,21 +124,36 @@ class GaitTable:
                         f[SHARE : SHARE + 4] = [1.0, 0, 0, 0] - 0.5 * smooth
                     else:
                         f[SHARE : SHARE + 4] = smooth
-                if sway is not None:
-                    f[TILT : TILT + 4] = _cubic(lambda t, nu: sway(t, nu), t0, t1)
+                f[SWAY : SWAY + 4] = _cubic(lambda t, nu: sway(t, nu), t0, t1)
+                before = 0.0 if k == 0 else lean[k - 1]
+                after = lean[k] if k < N else 0.0
+                if in_ssp:
+                    f[TILT] = after
                 else:
-                    before = 0.0 if k == 0 else lean[k - 1]
-                    after = lean[k] if k < N else 0.0
-                    if in_ssp:
-                        f[TILT] = after
-                    else:
-                        span = after - before
-                        f[TILT : TILT + 4] = [before, 0.0, 3 * span / dsp**2, -2 * span / dsp**3]
+                    span = after - before
+                    f[TILT : TILT + 4] = [before, 0.0, 3 * span / dsp**2, -2 * span / dsp**3]
                 rows_f.append(f)
                 rows_i.append([k, side, in_ssp, stance_k, 2 * k + in_ssp])
         floats, ints = np.array(rows_f), np.array(rows_i, dtype=np.int64)
         first = np.searchsorted(floats[:, T0], (np.arange(N) + 1) * T - 1e-9 * T)
-        return cls(floats, ints, floats[first, TILT].copy(), N)
+        landing = np.stack([floats[first, TILT], floats[first, SWAY]])
+        default = (float(timeline.step_length), 1.0 if timeline.tilt_profile == "sway" else 0.0)
+        return cls(floats, ints, landing, N, default)
+
+    def individuals(self, X) -> np.ndarray:
+        """Population X as the kernel's (P, ``COLUMNS``) array.
+
+        X may have 3 columns (Hz, Szmax, tilt: the paper's family, completed with no
+        pelvis offset, the timeline's step length and its tilt profile's sway share)
+        or all 6.
+        """
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if X.ndim != 2 or X.shape[1] not in (3, COLUMNS):
+            raise ValueError(f"population of shape {X.shape}: must be (P, 3) or (P, {COLUMNS})")
+        if X.shape[1] == 3:
+            rest = np.broadcast_to(np.array([0.0, *self.default]), (X.shape[0], 3))
+            X = np.concatenate([X, rest], axis=1)
+        return np.ascontiguousarray(X)
 
     def piece_of(self, timeline: Timeline) -> np.ndarray:
         """Piece index of each sample of ``timeline.t``, by the Timeline's own phase rule."""

@@ -89,6 +89,48 @@ def test_kernel_equals_the_numpy_reference(spec, slope_deg, profile):
     _close("min margin", margin, ref_margin)
 
 
+@pytest.mark.parametrize("slope_deg", (-20.0, 0.0, 22.5))
+def test_extended_columns_reproduce_the_walks_they_name(spec, slope_deg):
+    """A 6-column individual walks the timeline its step length and sway share name.
+
+    (Hz, Szmax, tilt, 0, L, w) on a walk of step length L0 and hold profile must give,
+    series by series, the 3-column walk of a timeline with step length L and, for
+    w = 0 / 1, the hold / sway profile: L scales every x of the walk and w blends the
+    two lean profiles (and their footprints). A pelvis offset δ moves the hip and
+    nothing else: the IK'd legs put the stance ankle -> hip vector δ further along x_S.
+    """
+    params = ga_params(spec, 1.0, np.deg2rad(slope_deg))
+    X = _population(spec, params, 6, seed=3)
+    length = 0.8 * spec.thigh
+    walk = kernel_walk(spec, Timeline.of(params))
+    for share, profile in ((0.0, "hold"), (1.0, "sway")):
+        other = replace(params, step_length=length, tilt_profile=profile)
+        expected = kernel_walk(spec, Timeline.of(other)).series(other.slope, X)
+        rest = np.tile([0.0, length, share], (len(X), 1))
+        got = walk.series(params.slope, np.concatenate([X, rest], axis=1))
+        _close(profile, got, expected)
+    # δ: compare the hip x of the stance leg from its joint angles (planar sagittal chain)
+    base = walk.series(params.slope, X)
+    delta = 0.004
+    moved = walk.series(
+        params.slope, np.concatenate([X, np.tile([delta, params.step_length, 0.0], (len(X), 1))], 1)
+    )
+
+    def hip_x(rows):  # stance ankle -> hip along x_S from q2 (ankle pitch), q3 (knee)
+        q2, q3 = rows[..., sm.Q + 1], rows[..., sm.Q + 2]
+        return spec.shank * np.sin(-q2) + spec.thigh * np.sin(-q2 - q3)
+
+    lean = np.cos(base[..., sm.Q])  # the roll lean shortens nothing along x: check it is common
+    np.testing.assert_allclose(lean, np.cos(moved[..., sm.Q]), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(hip_x(moved) - hip_x(base), delta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        moved[..., sm.SWING_SOLE : sm.SWING_SOLE + 3],
+        base[..., sm.SWING_SOLE : sm.SWING_SOLE + 3],
+        rtol=0,
+        atol=1e-12,
+    )
+
+
 def test_plan_walk_is_the_reference_plan(spec):
     """The Plan the CLI writes (1 ms, nominal gait on 22.5°) equals the numpy pipeline's."""
     params = GaitParams.nominal(spec, 1.0, slope=np.deg2rad(22.5))
