@@ -59,7 +59,10 @@ def plan(args) -> None:
         f" at t = {summary['time_of_min_margin_s']:.3f} s)"
     )
     predicted = predict(plan, friction=np.inf)  # no μ here: slip is judged by `trial`
-    print(f"predicted: {predicted.verdict}  (joint limits, foot slide, tip; rigid servos)")
+    print(
+        f"predicted: {predicted.verdict}  "
+        "(joint limits, foot slide, tip; rigid servos on a rigid floor)"
+    )
     for event in predicted.events[:8]:
         print(f"  {event.time:7.3f} s  {event.kind:<12} {event.cause}")
     print(

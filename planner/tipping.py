@@ -1,42 +1,86 @@
-"""Tipping predictor: the foot's rotation about the support edge while the ZMP is outside.
+"""Tipping predictor: the support's rocking about its edges while and after the ZMP is outside.
 
 The paper's test is binary: the ZMP leaves the support polygon or not. A brief
-excursion need not tip the robot. While the ZMP (the point where the ground
-reaction would have to act for the plan to be followed) lies a distance e beyond
-the polygon's edge, the ground can push only at the edge, so an unbalanced moment
-F_n e about that edge is left; it turns the whole robot about the edge
-(cf. Goswami's foot-rotation indicator, FRI):
+excursion need not tip the robot, and several brief ones can. While the ZMP (the
+point where the ground reaction would have to act for the plan to be followed)
+lies beyond the support's edge, the ground can push only at that edge; the
+unbalanced moment turns the whole robot about it (cf. Goswami's foot-rotation
+indicator). The joints keep the planned pose (measured in MuJoCo: the pelvis
+turns with the stance foot to within 0.1°), so the robot rocks as one rigid body
+on its support, about two axes of the plane (small angles, each on its own):
 
-    I_edge θ̈ = F_n · (−margin + h θ)          θ ≥ 0 (the sole cannot sink into the plane)
+* roll θ_y about a line along x: the support's extreme lines y = y_max, y_min
+  (the outer sole edges, the stance foot's inner edge in single support);
+* pitch θ_x about a line along y: x = x_max (toe), x = x_min (heel).
 
-with margin the signed ZMP margin (negative outside), F_n the planned normal
-ground force, h the CoM's height above the plane and I_edge the robot's moment
-of inertia about the edge line. The term h θ is the inverted pendulum's: turning
-the robot by θ about the edge carries its CoM h θ further out over it, so a
-rotation, once started, feeds itself (F_n h / I_edge ≈ 50 s⁻² for the default
-robot: a time constant of 0.14 s, as long as an excursion). Once the ZMP is back
-inside by more than h θ, the moment restores; the foot lands (θ = 0) and stops
-(θ̇ = 0, no bounce).
-The rotation is integrated sample by sample (semi-implicit Euler on the plan's
-time base) through each excursion and after it until the foot is back down. The
-pivot is fixed for one rotation: the moment is the ZMP's distance beyond that
-edge's line (e = −margin while the ZMP is outside near it), so an excursion past
-the opposite edge pushes the robot back, as it would.
-``tip`` is predicted when θ passes the simulator's tip angle.
+θ > 0 leans the robot towards the + side about the + line, θ < 0 towards the
+− side about the − line. With u the axis coordinate (y for roll, x for pitch),
+e the pivot line, z_u the ZMP and c the CoM, both sides obey
 
-Small-angle model: sin θ ≈ θ, cos θ ≈ 1 (under 0.4 % at 5°); the pivot is the
-polygon edge nearest to the ZMP when the excursion starts, and I_edge its value
-then (the pose changes little within a rotation).
+    I_e θ̈ = F_n (z_u − e) + K_e θ
 
-I_edge = Σ_k m_k d_k² + ê·I_k ê over the 9 links, d_k the distance of link k's
-CoM from the edge line and I_k its inertia about its CoM, both in S.
+F_n the planned normal ground force, I_e the robot's moment of inertia about the
+pivot line (``edge_inertia``) and K_e the gravity stiffness of the rotation:
+turning the robot by θ about the line is, in the robot's frame, gravity turned
+by −θ, which moves the ZMP and the normal force; from the potential energy,
+
+    K_e = m g (h cos α + (c_x − e) sin α)   (pitch; α the slope, h the CoM height)
+    K_e = m g h cos α                      (roll)
+
+(an uphill walker falling backwards over its heel has the larger K). The moment
+restores once the ZMP is back inside by more than K_e θ / F_n.
+
+The rotation's history is carried, not reset:
+
+* Landing (θ back through 0): the support line on the other side meets the
+  plane. The impact's impulse acts there, so the angular momentum about that
+  line is kept (Housner's rocking block), and the robot rocks on about it with
+  θ̇⁺ = r θ̇⁻, r = 1 − m (e_old − e_new)(c_u − e_new) / I_new;
+  r ≤ 0 (the CoM far out over the new line) lands it dead. Measured in MuJoCo
+  (``tests/sim/test_tipping_mujoco.py``): a block rocks on as this law says.
+  So an excursion past one edge and then one past the other, a step later,
+  add up: the rocking of a fast walk is pumped step after step.
+* Rest: when a landing's rocking speed is less than one sample of the new side's
+  restoring moment takes away, the robot stays flat (θ = θ̇ = 0); flat, it
+  starts again only where the ZMP is outside the support lines.
+* Floor give: the simulator's floor is soft (MuJoCo's soft contacts: each sole
+  corner a spring of stiffness k_c, derived from the solver's solref/solimp
+  in ``bench/sim/floor.py``). It turns the support by the give angle
+  θ_g = F_n (p − m) / k_rot before any edge lifts, p the CoP (the ZMP while
+  flat, the pivot line while turning), m the corners' centroid and
+  k_rot = k_c Σ (u_i − m)² over the support's sole corners (measured in MuJoCo:
+  70 N m/rad in pitch, 26 in roll for the default foot, against 65 and 23
+  derived). The give adds to the tilt and gravity acts on the whole of it,
+  I_e θ̈ = F_n (z_u − e) + K_e (θ + θ_g): a walk leaning on a heel starts its
+  rotation already turned by the give, which the inverted pendulum amplifies.
+  ``floor_stiffness`` None is a rigid floor (θ_g = 0).
+* Prop: in single support the swing sole, at height s over the plane, blocks a
+  rotation towards it once it reaches the plane: θ ≤ s / ℓ (ℓ the distance from
+  the pivot to the swing sole's far edge beyond it). It lands without bounce
+  (MuJoCo's contacts are critically damped) and carries load from then on.
+
+``tip`` is predicted when the tilt √(θ_x² + θ_y²) (lift and give) passes the simulator's tip
+angle. The rotation is integrated sample by sample (semi-implicit Euler on the
+plan's time base); a rotation past ``FALLEN`` is reported as that.
+
+Not modelled: a slanted edge of the double-support hull (a rotation about it is
+both axes at once; the extreme lines are the sole edges of feet parallel to x),
+and the servos' tracking lag (the compliance pass, ``compliance.py``, is
+quasi-static).
+
+I_e = Σ_k m_k d_k² + ê·I_k ê over the 9 links, d_k the distance of link k's
+CoM from the line and I_k its inertia about its CoM, both in S.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planner.kinematics import Chain
+from planner.kinematics import Chain, gravity_in_slope
+from planner.zmp import foot_corners
+
+FALLEN = np.pi / 2  # [rad]: a rotation past this is reported as this (the robot is down)
+ROLL, PITCH = 1, 0  # axis coordinate of each rotation: y for roll, x for pitch
 
 
 def excursion_integral(t, drive, inertia, feedback=0.0) -> np.ndarray:
@@ -47,7 +91,7 @@ def excursion_integral(t, drive, inertia, feedback=0.0) -> np.ndarray:
         drive: Generalised force [N m or N], (n,): positive pushes x away from 0.
         inertia: Inertia about the motion [kg m² or kg], (n,) or scalar, > 0.
         feedback: k, the force per unit x that x itself adds [N m/rad or N/m], (n,)
-            or scalar, ≥ 0 (the inverted pendulum's F_n h for a rotation).
+            or scalar, ≥ 0 (the inverted pendulum's m g h for a rotation).
 
     Returns:
         x at each sample [rad or m], (n,).
@@ -68,30 +112,6 @@ def excursion_integral(t, drive, inertia, feedback=0.0) -> np.ndarray:
                 x, v = 0.0, 0.0  # landed back
         out[k] = x
     return out
-
-
-def nearest_edge(points, polygon) -> tuple[np.ndarray, np.ndarray]:
-    """The polygon edge nearest to each point: a point on it and its unit direction.
-
-    Args:
-        points: (n, 2) [m].
-        polygon: Counter-clockwise vertices, repeats allowed, (n, V, 2) [m].
-
-    Returns:
-        (edge start (n, 2) [m], unit direction (n, 2)).
-    """
-    a = polygon
-    edge = np.roll(polygon, -1, axis=1) - a
-    length = np.hypot(edge[..., 0], edge[..., 1])
-    valid = length > 1e-12
-    safe = np.where(valid, length, 1.0)
-    rel = points[:, None, :] - a
-    s = np.clip(np.einsum("nvi,nvi->nv", rel, edge) / safe**2, 0.0, 1.0)
-    closest = a + s[..., None] * edge
-    gap = np.where(valid, np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)), np.inf)
-    best = np.argmin(gap, axis=1)
-    rows = np.arange(points.shape[0])
-    return a[rows, best], edge[rows, best] / safe[rows, best, None]
 
 
 def edge_inertia(plan, rows, edge_point, edge_direction) -> np.ndarray:
@@ -120,44 +140,159 @@ def edge_inertia(plan, rows, edge_point, edge_direction) -> np.ndarray:
     return np.einsum("l,kl->k", chain.mass, distance2) + spin.sum(axis=1)
 
 
-FALLEN = np.pi / 2  # [rad]: a rotation past this is reported as this (the robot is down)
+def landing_restitution(mass, com, old_line, new_line, new_inertia) -> float:
+    """θ̇⁺ / θ̇⁻ of a rigid body rocking from ``old_line`` onto ``new_line`` (Housner), ≥ 0.
 
-
-def foot_rotation(plan, margin=None, zmp=None) -> np.ndarray:
-    """Predicted rotation of the support about its edge [rad], (n,) (see module doc).
-
-    A rotation starts when the ZMP leaves the polygon while the support lies flat;
-    its pivot is the polygon edge nearest to the ZMP then, held until the support
-    is flat again. It is driven by the ZMP's signed distance beyond that pivot's
-    line, e (positive outside): I_edge θ̈ = F_n (e + h θ), I_edge taken at the start.
+    The landing impulse acts on the new line, so the angular momentum about it is
+    kept: I_new θ̇⁺ = (I_new − m (e_old − e_new)(c − e_new)) θ̇⁻.
 
     Args:
-        plan: The walk; its polygon, ground force, joint angles and CoM are used.
-        margin, zmp: The ZMP series to judge, (n,) and (n, 2); default the plan's own.
+        mass: m [kg].
+        com: c, the CoM's coordinate across the lines [m].
+        old_line, new_line: e_old, e_new [m], same coordinate.
+        new_inertia: I_new, about the new line [kg m²].
+
+    Returns:
+        The ratio; 0 when the body lands dead (the CoM far out over the new line).
     """
-    margin = plan.margin if margin is None else margin
+    r = 1.0 - mass * (old_line - new_line) * (com - new_line) / new_inertia
+    return max(float(r), 0.0)
+
+
+def support_lines(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """The support's extreme lines along ``axis`` (ROLL: y, PITCH: x) [m]: (lower, upper), (n,)."""
+    coordinate = plan.polygon[..., axis]
+    return coordinate.min(axis=1), coordinate.max(axis=1)
+
+
+def line_inertia(plan, axis: int, position: np.ndarray) -> np.ndarray:
+    """``edge_inertia`` about the line u = ``position`` (n,) of ``axis`` at every sample [kg m²]."""
+    rows = np.arange(plan.t.size)
+    point = np.zeros((rows.size, 2))
+    point[:, axis] = position
+    direction = np.zeros((rows.size, 2))
+    direction[:, 1 - axis] = 1.0  # roll turns about a line along x, pitch along y
+    return edge_inertia(plan, rows, point, direction)
+
+
+def gravity_stiffness(plan, axis: int, line: np.ndarray) -> np.ndarray:
+    """K_e [N m/rad], (n,): the moment per radian gravity adds to a rotation about ``line``."""
+    g = gravity_in_slope(plan.params.slope)  # (g_x, 0, g_z) in S, g_z < 0
+    mass = plan.spec.total_mass
+    k = -mass * g[2] * plan.com[:, 2]
+    if axis == PITCH:
+        k = k - mass * g[0] * (plan.com[:, 0] - line)
+    return k
+
+
+def give_stiffness(plan, axis: int, corner_stiffness: float) -> tuple[np.ndarray, np.ndarray]:
+    """k_rot [N m/rad] and the corners' centroid m [m] of the soft support, (n,) each.
+
+    The support's springs are the stance sole's 4 corners, and the other sole's 4 in
+    double support, each of stiffness ``corner_stiffness`` [N/m].
+    """
+    spec = plan.spec
+    shape = (spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2)
+    stance = foot_corners(plan.stance_sole, *shape)[..., axis]  # (n, 4)
+    other = foot_corners(plan.swing_sole, *shape)[..., axis]
+    both = plan.double_support[:, None]
+    count = np.where(both, 8, 4)[:, 0]
+    centroid = (stance.sum(axis=1) + np.where(both, other, 0.0).sum(axis=1)) / count
+    spread = ((stance - centroid[:, None]) ** 2).sum(axis=1)
+    spread += np.where(both, (other - centroid[:, None]) ** 2, 0.0).sum(axis=1)
+    return corner_stiffness * spread, centroid
+
+
+def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """The swing sole's extent along ``axis`` [m]: (lower, upper) edge, (n,) each."""
+    sole = plan.swing_sole[:, axis]
+    spec = plan.spec
+    if axis == ROLL:
+        half = spec.foot_width / 2
+        return sole - half, sole + half
+    return sole - spec.heel_offset, sole + spec.ankle_to_toe
+
+
+def rocking(plan, axis: int, zmp=None, clearance=None, floor_stiffness=None) -> np.ndarray:
+    """Signed tilt of the robot on its support about ``axis``'s lines [rad], (n,) (module doc).
+
+    Args:
+        plan: The walk: polygon, ground force, CoM, joint angles, swing sole.
+        axis: ROLL (lines along x, θ > 0 leans towards +y) or PITCH (towards +x).
+        zmp: The ZMP series to judge, (n, 2) [m]; default the plan's own.
+        clearance: Swing sole height over the plane [m], (n,); default the plan's.
+        floor_stiffness: k_c of each sole corner on the soft floor [N/m], > 0; None: rigid.
+
+    Returns:
+        θ + θ_g: the lift about the pivot line plus the floor's give.
+    """
     zmp = plan.zmp if zmp is None else zmp
+    clearance = plan.swing_sole[:, 2] if clearance is None else clearance
+    lower, upper = support_lines(plan, axis)
+    lines = (lower, upper)
+    inertia = tuple(line_inertia(plan, axis, e) for e in lines)
+    stiffness = tuple(gravity_stiffness(plan, axis, e) for e in lines)
+    mass = plan.spec.total_mass
+    com = plan.com[:, axis]
     normal = np.maximum(plan.ground_force[:, 2], 0.0)
-    height = np.maximum(plan.com[:, 2], 0.0)
+    z = zmp[:, axis]
+    reach_low, reach_high = swing_reach(plan, axis)
+    single = ~plan.double_support
+    height = np.maximum(clearance, 0.0)
     dt = np.diff(plan.t, prepend=plan.t[0])
     theta = np.zeros(plan.t.size)
-    outside = np.flatnonzero(margin < 0)
-    if not outside.size:
-        return theta
-    x, v, pivot = 0.0, 0.0, None
-    for k in range(outside[0], plan.t.size):
-        if pivot is None:
-            if not margin[k] < 0:
+    if floor_stiffness is None:
+        compliance, centroid = np.zeros(plan.t.size), np.zeros(plan.t.size)
+    else:
+        k_rot, centroid = give_stiffness(plan, axis, floor_stiffness)
+        compliance = normal / k_rot  # [rad/m]: give per metre of CoP offset
+    flat_give = compliance * (np.clip(z, lower, upper) - centroid)
+    x, v = 0.0, 0.0
+    for k in range(plan.t.size):
+        if x == 0.0 and v == 0.0:  # flat: starts only with the ZMP past a line
+            if lower[k] <= z[k] <= upper[k]:
+                theta[k] = flat_give[k]
                 continue
-            point, direction = nearest_edge(zmp[k : k + 1], plan.polygon[k : k + 1])
-            inertia = edge_inertia(plan, np.array([k]), point, direction)[0]
-            inward = np.array([-direction[0, 1], direction[0, 0]])
-            pivot = (point[0], inward, inertia)
-        point, inward, inertia = pivot
-        beyond = -float((zmp[k] - point) @ inward)
-        v += normal[k] * (beyond + height[k] * x) / inertia * dt[k]
-        x = min(x + v * dt[k], FALLEN)
-        if x <= 0.0:
-            x, v, pivot = 0.0, 0.0, None  # flat again (no bounce)
-        theta[k] = x
+            side = 1 if z[k] > upper[k] else 0
+        else:
+            side = 1 if x > 0.0 or (x == 0.0 and v > 0.0) else 0
+        e = lines[side][k]
+        give = compliance[k] * (e - centroid[k])  # the CoP sits on the pivot line
+        drive = normal[k] * (z[k] - e) + stiffness[side][k] * (x + give)
+        v += drive / inertia[side][k] * dt[k]
+        moved = x + v * dt[k]
+        sign = 1.0 if side else -1.0
+        if moved * sign <= 0.0:  # back through flat: the other line lands
+            other = 1 - side
+            e_new = lines[other][k]
+            v = landing_restitution(mass, com[k], e, e_new, inertia[other][k]) * v
+            pull = normal[k] * (z[k] - e_new) / inertia[other][k] * dt[k]
+            x = 0.0
+            if v == 0.0 or (v + pull) * v <= 0.0:
+                v = 0.0  # the rocking dies on landing: flat
+        else:
+            x = moved
+        if single[k] and x != 0.0:  # the swing sole props a rotation towards it
+            beyond = (reach_high[k] - upper[k]) if x > 0 else (lower[k] - reach_low[k])
+            if beyond > 0.0 and abs(x) * beyond > height[k]:
+                x = np.copysign(height[k] / beyond, x)
+                v = min(v, 0.0) if x > 0 else max(v, 0.0)
+                if x == 0.0:
+                    v = 0.0
+        x = float(np.clip(x, -FALLEN, FALLEN))
+        theta[k] = x + (give if x != 0.0 or v != 0.0 else flat_give[k])
     return theta
+
+
+def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None) -> np.ndarray:
+    """Predicted tilt of the support off the plane [rad], (n,): √(roll² + pitch²), ≤ FALLEN.
+
+    Args:
+        plan: The walk (see ``rocking``).
+        zmp: The ZMP series to judge, (n, 2) [m]; default the plan's own.
+        clearance: Swing sole height over the plane [m], (n,); default the plan's.
+        floor_stiffness: k_c of each sole corner [N/m]; None: a rigid floor.
+    """
+    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness)
+    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness)
+    return np.minimum(np.hypot(roll, pitch), FALLEN)

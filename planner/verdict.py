@@ -7,8 +7,9 @@ the analytic series, with the simulator's own thresholds (defined here, used by
 
 * ``joint_limit``: a planned joint angle outside the spec's limits (the MJCF's
   joint range stops it there, so the walk played is not the walk planned).
-* ``tip``: the support's rotation about its edge (``tipping.foot_rotation``)
-  passes ``TIP_ANGLE``.
+* ``tip``: the support's tilt (``tipping.foot_rotation``: the robot rocking on
+  its support's edges, the rocking carried from one excursion to the next, on
+  the simulator's soft floor) passes ``TIP_ANGLE``.
 * ``strike``: the swing sole of the walk actually made (compliance-aware) would
   go into the plane in single support; the plane props the robot up and turns
   the stance foot about its far edge (``strike.strike_roll``) past ``TIP_ANGLE``.
@@ -89,17 +90,26 @@ def joint_limit_events(plan) -> list[PredictedEvent]:
     return events
 
 
-def tip_events(plan, margin=None, zmp=None) -> tuple[list[PredictedEvent], np.ndarray]:
-    """``tip`` where the rotation about the support edge passes TIP_ANGLE; and the rotation."""
-    theta = foot_rotation(plan, margin, zmp)
+def tip_events(
+    plan, zmp=None, *, clearance=None, floor_stiffness=None
+) -> tuple[list[PredictedEvent], np.ndarray]:
+    """``tip`` where the support's tilt passes TIP_ANGLE; and the tilt [rad], (n,).
+
+    Args:
+        plan: The walk to judge.
+        zmp: Its ZMP series, (n, 2) [m]; default the plan's.
+        clearance: Swing sole height [m], (n,), for the swing sole's prop; default the plan's.
+        floor_stiffness: Sole-corner stiffness of the soft floor [N/m]; None: rigid.
+    """
+    theta = foot_rotation(plan, zmp, clearance, floor_stiffness)
     return _first_past(
         plan.t,
         theta,
         TIP_ANGLE,
         "tip",
         lambda: (
-            f"support turns {np.rad2deg(theta.max()):.1f} deg about its edge "
-            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg) while the ZMP is outside"
+            f"support tilts {np.rad2deg(theta.max()):.1f} deg rocking on its edges "
+            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
         ),
     ), theta
 
@@ -234,6 +244,7 @@ def predict(
     walk=None,
     stiffness: float | None = None,
     force_limit: float = np.inf,
+    floor_stiffness: float | None = None,
 ) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
 
@@ -244,10 +255,17 @@ def predict(
             tip, slip and strike are judged on it. None: on ``plan`` itself, no strike.
         stiffness: The servo's kp [N m/rad], with ``walk``.
         force_limit: The servo's torque limit [N m], with ``walk``.
+        floor_stiffness: Sole-corner stiffness of the simulator's soft floor [N/m]
+            (``bench/sim/floor.py``); None: a rigid floor, no give.
+
+    The swing sole's prop uses the planned clearance: where the servos' sag puts the
+    reached walk's sole into the plane, that is ``strike``'s case, not a prop.
     """
     made = plan if walk is None else walk.plan
     events = joint_limit_events(plan) + foot_slide_events(plan)
-    tips, rotation = tip_events(made)
+    tips, rotation = tip_events(
+        made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness
+    )
     slips, slide = slip_events(made, friction)
     events += tips + slips
     if walk is not None:

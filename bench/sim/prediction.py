@@ -13,13 +13,18 @@ Three predictions sit side by side (``TrialPrediction``):
 The servo is the trial's actuator mode (``model.servo_settings``), and in a
 feedforward mode the loop is fed the same clipped torque as in the simulation
 (``playback.feedforward_torque``), so the prediction models the loop that is played.
+The floor is the scene's: its soft contact's corner stiffness (``floor.py``) gives
+the tipping predictor the floor's give.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bench.sim.model import servo_settings
+import mujoco
+
+from bench.sim.floor import scene_corner_stiffness
+from bench.sim.model import scene_xml, servo_settings
 from bench.sim.playback import feedforward_stance_swing
 from planner.compliance import CompliantWalk, compliant_walk
 from planner.plan import Plan
@@ -58,8 +63,16 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         armature=servo.armature,
         feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
     )
+    scene = mujoco.MjModel.from_xml_string(
+        scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
+    )
     prediction = predict(
-        plan, friction=friction, walk=walk, stiffness=servo.kp, force_limit=servo.force_limit
+        plan,
+        friction=friction,
+        walk=walk,
+        stiffness=servo.kp,
+        force_limit=servo.force_limit,
+        floor_stiffness=scene_corner_stiffness(scene),
     )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
