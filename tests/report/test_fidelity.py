@@ -34,8 +34,8 @@ def test_agreement_counts_walks_against_does_not():
     assert "| predicted | 3/4 | 75.0% |" in text
     assert "### Disagreements of the predicted verdict (1)" in text
     assert "predicted stable, simulated tip (tip, first at 0.80 s)" in text
-    assert "predicted support rotation 1.50°" in text  # the measured quantities, quoted
-    assert "**floor give**: predicted stable, simulated tip" in text
+    assert "predicted support tilt 1.50°" in text  # the measured quantities, quoted
+    assert "**rocking short of the tip angle**: predicted stable, simulated tip" in text
 
 
 def test_each_disagreement_gets_its_class():
@@ -45,9 +45,12 @@ def test_each_disagreement_gets_its_class():
     assert cause_class(sway) == "servo sway"
     survived = _row("stable", "saturation", "stable", actuators="servo_ff", events="torque_limit")
     assert cause_class(survived) == "survived saturation"
+    short = _row("zmp_outside", "stable", "tip", predicted_rotation_deg=3.9)
+    assert cause_class(short) == "rocking short of the tip angle"
     inside = _row(
-        "stable", "stable", "tip", analytic_min_margin_mm=2.0, compliant_min_margin_mm=1.0
-    )
+        "stable", "stable", "tip", analytic_min_margin_mm=2.0, compliant_min_margin_mm=1.0,
+        predicted_rotation_deg=0.4,
+    )  # fmt: skip
     assert cause_class(inside) == "unexplained"
 
 
