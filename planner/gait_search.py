@@ -35,7 +35,7 @@ import numpy as np
 
 from planner.errors import SlopewalkError
 from planner.ik import tilted_plane_height, two_link_ik
-from planner.joints import JOINT_KINDS, RIGHT
+from planner.joints import JOINT_KINDS, RIGHT, principal_angle
 from planner.plan import score
 from planner.spec import RobotSpec
 from planner.trajectory import Curve, GaitParams, Timeline
@@ -169,6 +169,10 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
     −β_shank, both legs, every sample). Positive where some joint leaves its
     limits somewhere in the walk, ≤ 0 (minus the smallest distance to a limit)
     when every sample is admissible; inf where a target is out of reach.
+
+    Each angle is the joint's configuration, its principal value in (−π, π]
+    (``joints.principal_angle``), as in a plan; the compiled kernel gets its
+    extremes from tan(q/2).
     """
     X = np.atleast_2d(np.asarray(population, dtype=float))
     u, w, _, _ = leg_vectors(spec, timeline, X[:, 0], X[:, 1], X[:, 2])
@@ -188,6 +192,7 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
         ("ankle_pitch", -shank.p),
     ):
         lo, hi = spec.joint_limits[kind]
+        q = principal_angle(q)
         gaps.append(np.maximum(lo - q, q - hi).max(axis=(1, 2)))
     gap = np.max(gaps, axis=0)
     return np.where(np.isnan(gap), np.inf, gap)

@@ -23,6 +23,11 @@ The paper's θ8 = −θ1 (swing foot parallel to the ground) reads ``q[7] = q[0]
 in these signs: both ankle rolls equal minus the lateral lean of the legs.
 
 The stance leg alternates between steps; ``stance`` is 0 for left, 1 for right.
+
+Every joint angle is the principal value of the joint's configuration, in
+(−π, π] (``principal_angle``): the IK's β_shank = ψ + φ passes π only in postures
+far from a walk (the swing sole above its hip), where the unwrapped sum would
+count a full turn of a joint as an excursion past its limit.
 """
 
 from __future__ import annotations
@@ -81,3 +86,10 @@ def stance_swing_to_left_right(q: np.ndarray, stance: np.ndarray) -> np.ndarray:
     left = np.where(left_is_stance, stance_leg, swing_leg)
     right = np.where(left_is_stance, swing_leg, stance_leg)
     return np.concatenate([left, right], axis=1)
+
+
+def principal_angle(q):
+    """q wrapped to (−π, π] [rad] (same shape, values inside untouched); as the kernel does."""
+    q = np.asarray(q, dtype=float)
+    inside = (q > -np.pi) & (q <= np.pi)
+    return np.where(inside | np.isnan(q), q, np.pi - np.mod(np.pi - q, 2 * np.pi))

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.ik import tilted_plane_height, two_link_ik
-from planner.joints import RIGHT
+from planner.joints import RIGHT, principal_angle
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
 from planner.trajectory import Curve, GaitParams, Timeline, footprint_y
@@ -109,6 +109,7 @@ def solve_reference(spec, timeline, slope, hip_height, lift, tilt, *, strict, li
             (lam.a, bs.a, bt.a, bs2.a, bt2.a),
         )
     )
+    q = principal_angle(q)  # the joints' configuration (``planner.joints``)
 
     feet_y = footprint_y(timeline, spec.hip_width, col(tilt)[:, 0])  # (P, N)
     step = np.minimum(timeline.step, timeline.steps - 1)

@@ -61,6 +61,15 @@ def _footprints(landing, x, hip_width):
     return y
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def _run_end(pieces, j, stop):
+    """End of the run of samples from j (< stop) on one piece, at most ``BLOCK`` long."""
+    e = j + 1
+    while e < stop and pieces[e] == pieces[j] and e - j < sm.BLOCK:
+        e += 1
+    return e
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
 def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, pieces, times):
     """Rows of every sample for every individual, shape (P, n, ROW).
@@ -74,27 +83,41 @@ def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, 
     size = -(-n // blocks)
     for task in prange(P * blocks):
         p, b = task // blocks, task % blocks
-        work = np.empty((sm.SCRATCH, 16))
-        y = _footprints(landing, X[p], geometry[tb.HIP_WIDTH])
-        for j in range(b * size, min(n, (b + 1) * size)):
-            sm.evaluate_sample(
-                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, X[p],
-                pieces[j], times[j], out[p, j], work, True,
+        w = sm.scratch()
+        x = X[p]
+        y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
+        j, stop = b * size, min(n, (b + 1) * size)
+        while j < stop:
+            e = _run_end(pieces, j, stop)
+            piece = pieces[j]
+            sm.evaluate_block(
+                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece,
+                times, j, e - j, w,
             )  # fmt: skip
+            xs = x[tb.STEP_LENGTH] * pf[piece, tb.STANCE_X]
+            sm.write_rows(mass, gravity, xs, y[pi[piece, tb.FOOT]], e - j, w, out[p, j:e])
+            j = e
     return out
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _margin_at(args, x, y, piece, t, row, work):
+def _margin_at(args, x, y, piece, t, probe, scratch):
+    """Signed ZMP margin [m] of individual x at time t [s] of ``piece`` (one-sample block).
+
+    The block's start and length are computed (0 and 1), not written as literals: a
+    literal argument would compile another version of the whole pipeline.
+    """
     pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity = args
-    sm.evaluate_sample(
-        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, t, row, work, False
-    )
-    return row[sm.MARGIN]
+    probe[0] = t
+    sm.evaluate_block(
+        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, probe, probe.size - 1,
+        probe.size, scratch,
+    )  # fmt: skip
+    return sm.margin(scratch, 0)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
+def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, probe, scratch):
     """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search).
 
     Returns (margin [m], samples evaluated).
@@ -111,7 +134,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
         if not (a < u < c) or abs(u - b) < 0.5 * REFINE_TOL:  # golden step into the larger side
             u = b + 0.381966 * (c - b) if (c - b) > (b - a) else b - 0.381966 * (b - a)
         piece = pa if u <= t1a else pc
-        fu = _margin_at(args, x, y, piece, u, row, work)
+        fu = _margin_at(args, x, y, piece, u, probe, scratch)
         moved = abs(u - b)
         if fu < fb:
             if u < b:
@@ -130,7 +153,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, row, work):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _refine_all(args, x, y, pieces, times, margin, row, work):
+def _refine_all(args, x, y, pieces, times, margin, probe, scratch):
     """Smallest margin [m] found by refining every local minimum of the sampled ``margin``.
 
     Interior minima are bracketed by their two neighbours. At the ends of a phase
@@ -150,27 +173,27 @@ def _refine_all(args, x, y, pieces, times, margin, row, work):
             if margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
                 found = _refine(
                     args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j],
-                    times[j], margin[j], pieces[j + 1], times[j + 1], margin[j + 1], row, work,
+                    times[j], margin[j], pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
                 )  # fmt: skip
                 low, count = min(low, found[0]), count + found[1]
         elif right and margin[j] <= margin[j + 1]:  # first sample of a phase
             u = times[j] + 1e-3 * (times[j + 1] - times[j])
-            fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            fu = _margin_at(args, x, y, pieces[j], u, probe, scratch)
             count += 1
             if fu < margin[j]:
                 found = _refine(
                     args, x, y, pieces[j], times[j], margin[j], pieces[j], u, fu,
-                    pieces[j + 1], times[j + 1], margin[j + 1], row, work,
+                    pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
                 )  # fmt: skip
                 low, count = min(low, found[0]), count + found[1]
         elif left and margin[j] <= margin[j - 1]:  # last sample of a phase
             u = times[j] - 1e-3 * (times[j] - times[j - 1])
-            fu = _margin_at(args, x, y, pieces[j], u, row, work)
+            fu = _margin_at(args, x, y, pieces[j], u, probe, scratch)
             count += 1
             if fu < margin[j]:
                 found = _refine(
                     args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], u, fu,
-                    pieces[j], times[j], margin[j], row, work,
+                    pieces[j], times[j], margin[j], probe, scratch,
                 )  # fmt: skip
                 low, count = min(low, found[0]), count + found[1]
     return low, count
@@ -184,7 +207,8 @@ def scores(
     """Work [J], minimum margin [m], joint gap [rad], samples evaluated, each shape (P,).
 
     ``limits``: (lower, upper) [rad] of each Table-I joint, shape (8, 2); the gap is the
-    worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples.
+    worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples,
+    from the extremes of tan(q/2) (``sample``: increasing in q on (−π, π)).
     Unreachable individuals get work = inf, margin = −inf, gap = inf.
     """
     P, n = X.shape[0], times.size
@@ -192,31 +216,42 @@ def scores(
     count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
     for p in prange(P):
-        work = np.empty((sm.SCRATCH, 16))
-        row = np.empty(sm.ROW)
+        scratch = sm.scratch()
+        probe = np.empty(1)
         margin = np.empty(n)
         power = np.empty(n)
+        high = np.full(6, -np.inf)  # extremes of tan(q/2) of q2..q7
+        low_h = np.full(6, np.inf)
         x = X[p]
         y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
-        gap = -np.inf
         bad = False
-        for j in range(n):
-            sm.evaluate_sample(
-                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x,
-                pieces[j], times[j], row, work, False,
+        j = 0
+        while j < n:
+            e = _run_end(pieces, j, n)
+            sm.evaluate_block(
+                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, pieces[j],
+                times, j, e - j, scratch,
             )  # fmt: skip
-            margin[j] = row[sm.MARGIN]
-            power[j] = row[sm.POWER]
-            if np.isnan(margin[j]) or np.isnan(power[j]):  # out of reach: no need to go on
-                bad = True
-                count_out[p] = j + 1
+            for k in range(e - j):
+                margin[j + k] = sm.margin(scratch, k)
+                power[j + k] = sm.power(scratch, k)
+                bad = bad or np.isnan(margin[j + k]) or np.isnan(power[j + k])
+            for i in range(6):
+                for k in range(e - j):
+                    h = sm.half_angle(scratch, i, k)
+                    high[i] = max(high[i], h)
+                    low_h[i] = min(low_h[i], h)
+            if bad:  # out of reach: no need to go on
+                count_out[p] = e
                 break
-            for i in range(1, 7):
-                q = row[sm.Q + i]
-                gap = max(gap, limits[i, 0] - q, q - limits[i, 1])
+            j = e
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
+        gap = -np.inf
+        for i in range(6):
+            q_high, q_low = 2.0 * np.arctan(high[i]), 2.0 * np.arctan(low_h[i])
+            gap = max(gap, limits[i + 1, 0] - q_low, q_high - limits[i + 1, 1])
         total = 0.0
         low = np.inf
         for j in range(n):
@@ -224,7 +259,7 @@ def scores(
             if j:
                 total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if refine:
-            found, extra = _refine_all(args, x, y, pieces, times, margin, row, work)
+            found, extra = _refine_all(args, x, y, pieces, times, margin, probe, scratch)
             low = min(low, found)
             count_out[p] += extra
         work_out[p], margin_out[p], gap_out[p] = total, low, gap
