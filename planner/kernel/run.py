@@ -6,10 +6,10 @@ rows per individual to the GA's numbers - joint work Σ∫|τθ̇|dt [J] (trapez
 the samples), minimum ZMP margin [m] and the worst joint-limit excursion [rad] -
 and refines the margin between samples: at every interior local minimum of the
 sampled margin it searches the bracket of the two neighbouring samples by
-safeguarded parabolic interpolation, and at the end of a phase whose margin still
-falls going inwards it does the same between the end and the next sample, so a
-dip between samples is not missed. The GA's samples include both one-sided limits
-of every phase change (``tables.limit_samples``).
+safeguarded parabolic interpolation, so a dip between samples is not missed. The
+GA's samples include both one-sided limits of every phase change and a probe next
+to each (``tables.limit_samples``), so a margin that still falls going inwards
+from a phase end is such a minimum too.
 
 Measured on random admissible gaits at −30…35°: at 100 samples per step the refined
 minimum is within 2e-5 mm below a 20 µs brute-force plan's, and never above the
@@ -38,6 +38,7 @@ from planner.spec import RobotSpec
 from planner.trajectory import Timeline
 
 REFINE_ITERATIONS = 12  # parabolic steps per local minimum at most
+SKIP_SAFETY = 8.0  # depth factor of the bound that skips a minimum (``_refine_all``)
 REFINE_TOL = 1e-7  # [s] stop when the bracket's best point moves less than this
 SERIES_BLOCK = 256  # samples per task of ``series`` at least
 _LAUNCH = threading.Lock()
@@ -154,49 +155,49 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, probe, scratch):
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def _refine_all(args, x, y, pieces, times, margin, probe, scratch):
-    """Smallest margin [m] found by refining every local minimum of the sampled ``margin``.
+    """Smallest margin [m] found by refining the local minima of the sampled ``margin``.
 
-    Interior minima are bracketed by their two neighbours. At the ends of a phase
-    (where the one-sided limits sit) a probe a thousandth of the sample spacing
-    inside tells whether the margin still falls going inwards; if it does, the
-    bracket is (end, probe, next sample). Returns (margin [m], samples evaluated).
+    A minimum is bracketed by its two neighbours within its phase; next to each
+    phase end the samples hold a probe (``tables.limit_samples``), so a margin that
+    still falls going inwards from an end is such a minimum too. Only the walk's
+    minimum matters, so the minima are refined lowest first, and one is skipped when
+    it cannot reach below the lowest margin found so far: a margin convex in its
+    bracket stays above m_j − max(m_(j−1), m_(j+1)) + m_j (the lines through the
+    samples bound it), and the skip asks for ``SKIP_SAFETY`` times that depth.
+    Measured on 20,000 random individuals of the GA's box at −30…35°: with the
+    factor 8 every margin above −0.5 m equals that of refining every minimum (with
+    2, one was 2.9 mm too high); only margins of kilometres, where a near-zero
+    vertical force sends the ZMP away, come out less deep.
+    Returns (margin [m], samples evaluated).
     """
     pi = args[1]
     n = times.size
-    low = np.inf
+    found_at = np.empty(n, dtype=np.int64)
     count = 0
+    low = np.inf
     for j in range(n):
+        low = min(low, margin[j])
+    for j in range(1, n - 1):
         ph = pi[pieces[j], tb.PHASE]
-        left = j > 0 and pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
-        right = j < n - 1 and pi[pieces[j + 1], tb.PHASE] == ph and times[j + 1] > times[j]
-        if left and right:
-            if margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
-                found = _refine(
-                    args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j],
-                    times[j], margin[j], pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
-                )  # fmt: skip
-                low, count = min(low, found[0]), count + found[1]
-        elif right and margin[j] <= margin[j + 1]:  # first sample of a phase
-            u = times[j] + 1e-3 * (times[j + 1] - times[j])
-            fu = _margin_at(args, x, y, pieces[j], u, probe, scratch)
+        left = pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
+        right = pi[pieces[j + 1], tb.PHASE] == ph and times[j + 1] > times[j]
+        if left and right and margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
+            found_at[count] = j
             count += 1
-            if fu < margin[j]:
-                found = _refine(
-                    args, x, y, pieces[j], times[j], margin[j], pieces[j], u, fu,
-                    pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
-                )  # fmt: skip
-                low, count = min(low, found[0]), count + found[1]
-        elif left and margin[j] <= margin[j - 1]:  # last sample of a phase
-            u = times[j] - 1e-3 * (times[j] - times[j - 1])
-            fu = _margin_at(args, x, y, pieces[j], u, probe, scratch)
-            count += 1
-            if fu < margin[j]:
-                found = _refine(
-                    args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], u, fu,
-                    pieces[j], times[j], margin[j], probe, scratch,
-                )  # fmt: skip
-                low, count = min(low, found[0]), count + found[1]
-    return low, count
+    minima = found_at[:count]
+    order = np.argsort(margin[minima])
+    evaluated = 0
+    for k in range(count):
+        j = minima[order[k]]
+        depth = max(margin[j - 1], margin[j + 1]) - margin[j]
+        if margin[j] - SKIP_SAFETY * depth >= low:
+            continue
+        found = _refine(
+            args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], times[j],
+            margin[j], pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
+        )  # fmt: skip
+        low, evaluated = min(low, found[0]), evaluated + found[1]
+    return low, evaluated
 
 
 @njit(cache=True, parallel=True, error_model="numpy")

@@ -31,7 +31,10 @@ one quantity over the block (w[r + j] at sample j, r a multiple of ``BLOCK``), e
 row offset a compile-time constant. The compiler then sees that the rows a loop
 writes never overlap the rows it reads, which it must know to vectorise the loop
 (rows of separate arrays, or of a 2-D array with run-time strides, it cannot tell
-apart). Measured per sample on one core (SSP block of 64, numba 0.61, AVX-512):
+apart); and every stage bounds its loops' trip count by ``BLOCK`` (``min(n, B)``),
+since a row's distance from the next is then at least the trip count: without the
+bound the compiler must assume the rows may overlap and leaves the loops scalar.
+Measured per sample on one core (SSP block of 64, numba 0.61, AVX-512):
 gait and IK 20 ns (of which sin/cos of λ ~9 ns: libm does not vectorise), FK 9 ns,
 then the recursions.
 """
@@ -159,6 +162,7 @@ def _leg(up, uv, ua, wq, wv, wa, l1, l2):
 @njit(**_KW)
 def _gait_ik(pf, piece, x, geometry, times, start, n, w):
     """Gait in closed form and the IK of both legs: rates, DH cos/sin, tan(q/2), λ, share."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     t0 = pf[piece, tb.T0]
     l1, l2 = geometry[tb.SHANK], geometry[tb.THIGH]
     lh, lan = geometry[tb.HIP_WIDTH], geometry[tb.ANKLE_HEIGHT]
@@ -262,38 +266,22 @@ def joint_angles(w, n, out, base):
 @njit(**_KW)
 def _kinematics(side, xs, ys, lan, dh_a, d5, n, w):
     """Frames 0..8 (``kinematics.Chain.poses``) and the swing sole point."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     # frame 0: columns x0 = z_S, y0 = −y_S, z0 = x_S; origin at the stance ankle
-    frame0 = (0.0, 0.0, 1.0, 0.0, -1.0, 0.0, 1.0, 0.0, 0.0, xs, ys, lan)
-    for k in range(12):
-        for j in range(n):
-            w[_FR + k * B + j] = frame0[k]
-    for i in range(8):
-        f, g = _FR + i * FRAME, _FR + (i + 1) * FRAME  # frame i, frame i + 1
-        ca, sa = _ALPHA_COS[i], _ALPHA_SIN[i]
-        d = d5[side] if i == 4 else 0.0
-        a = dh_a[i]
-        for j in range(n):
-            x0, x1, x2 = w[f + j], w[f + 3 * B + j], w[f + 6 * B + j]
-            y0, y1, y2 = w[f + B + j], w[f + 4 * B + j], w[f + 7 * B + j]
-            z0, z1, z2 = w[f + 2 * B + j], w[f + 5 * B + j], w[f + 8 * B + j]
-            # RotX(α) of the row
-            yt0, yt1, yt2 = ca * y0 + sa * z0, ca * y1 + sa * z1, ca * y2 + sa * z2
-            zt0, zt1, zt2 = ca * z0 - sa * y0, ca * z1 - sa * y1, ca * z2 - sa * y2
-            w[g + 9 * B + j] = w[f + 9 * B + j] + x0 * a + zt0 * d
-            w[g + 10 * B + j] = w[f + 10 * B + j] + x1 * a + zt1 * d
-            w[g + 11 * B + j] = w[f + 11 * B + j] + x2 * a + zt2 * d
-            c, sn = w[_CT + i * B + j], w[_ST + i * B + j]
-            w[g + j], w[g + 3 * B + j], w[g + 6 * B + j] = (
-                x0 * c + yt0 * sn,
-                x1 * c + yt1 * sn,
-                x2 * c + yt2 * sn,
-            )
-            w[g + B + j], w[g + 4 * B + j], w[g + 7 * B + j] = (
-                yt0 * c - x0 * sn,
-                yt1 * c - x1 * sn,
-                yt2 * c - x2 * sn,
-            )
-            w[g + 2 * B + j], w[g + 5 * B + j], w[g + 8 * B + j] = zt0, zt1, zt2
+    for j in range(n):
+        w[_FR + j], w[_FR + B + j], w[_FR + 2 * B + j] = 0.0, 0.0, 1.0
+        w[_FR + 3 * B + j], w[_FR + 4 * B + j], w[_FR + 5 * B + j] = 0.0, -1.0, 0.0
+        w[_FR + 6 * B + j], w[_FR + 7 * B + j], w[_FR + 8 * B + j] = 1.0, 0.0, 0.0
+        w[_FR + 9 * B + j], w[_FR + 10 * B + j], w[_FR + 11 * B + j] = xs, ys, lan
+    # one call per row, its index a literal (see ``_outward``)
+    _frame(0, dh_a[0], 0.0, n, w)
+    _frame(1, dh_a[1], 0.0, n, w)
+    _frame(2, dh_a[2], 0.0, n, w)
+    _frame(3, dh_a[3], 0.0, n, w)
+    _frame(4, dh_a[4], d5[side], n, w)
+    _frame(5, dh_a[5], 0.0, n, w)
+    _frame(6, dh_a[6], 0.0, n, w)
+    _frame(7, dh_a[7], 0.0, n, w)
     f = _FR + 8 * FRAME
     for j in range(n):  # swing sole: ankle_height along x8
         w[_SW + j] = w[f + 9 * B + j] + w[f + j] * lan
@@ -302,8 +290,35 @@ def _kinematics(side, xs, ys, lan, dh_a, d5, n, w):
 
 
 @njit(inline="always", **_KW)
+def _frame(i, a, d, n, w):
+    """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, 0, d) RotZ(θ)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    f, g = _FR + i * FRAME, _FR + (i + 1) * FRAME  # frame i, frame i + 1
+    ca, sa = _ALPHA_COS[i], _ALPHA_SIN[i]
+    for j in range(n):
+        x0, x1, x2 = w[f + j], w[f + 3 * B + j], w[f + 6 * B + j]
+        y0, y1, y2 = w[f + B + j], w[f + 4 * B + j], w[f + 7 * B + j]
+        z0, z1, z2 = w[f + 2 * B + j], w[f + 5 * B + j], w[f + 8 * B + j]
+        # RotX(α) of the row
+        yt0, yt1, yt2 = ca * y0 + sa * z0, ca * y1 + sa * z1, ca * y2 + sa * z2
+        zt0, zt1, zt2 = ca * z0 - sa * y0, ca * z1 - sa * y1, ca * z2 - sa * y2
+        w[g + 9 * B + j] = w[f + 9 * B + j] + x0 * a + zt0 * d
+        w[g + 10 * B + j] = w[f + 10 * B + j] + x1 * a + zt1 * d
+        w[g + 11 * B + j] = w[f + 11 * B + j] + x2 * a + zt2 * d
+        c, sn = w[_CT + i * B + j], w[_ST + i * B + j]
+        w[g + j] = x0 * c + yt0 * sn
+        w[g + 3 * B + j] = x1 * c + yt1 * sn
+        w[g + 6 * B + j] = x2 * c + yt2 * sn
+        w[g + B + j] = yt0 * c - x0 * sn
+        w[g + 4 * B + j] = yt1 * c - x1 * sn
+        w[g + 7 * B + j] = yt2 * c - x2 * sn
+        w[g + 2 * B + j], w[g + 5 * B + j], w[g + 8 * B + j] = zt0, zt1, zt2
+
+
+@njit(inline="always", **_KW)
 def _link(i, side, com, inertia, n, w):
     """Link i's CoM offset, CoM acceleration − g, Ḣ and joint axis, from ω, ω̇, a of origin i."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     f, lk = _FR + i * FRAME, _LK + i * LINK
     sign = _AXIS_SIGN[i]
     cb0, cb1, cb2 = com[side, i, 0], com[side, i, 1], com[side, i, 2]
@@ -343,6 +358,7 @@ def _link(i, side, com, inertia, n, w):
 @njit(**_KW)
 def _outward(side, com, inertia, gravity, n, w):
     """Outward recursion: ω, ω̇ and a − g from joint to joint, each link's terms (``_link``)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     for j in range(n):
         w[_OMEGA + j] = w[_OMEGA + B + j] = w[_OMEGA + 2 * B + j] = 0.0
         w[_DOMEGA + j] = w[_DOMEGA + B + j] = w[_DOMEGA + 2 * B + j] = 0.0
@@ -371,6 +387,7 @@ def _outward(side, com, inertia, gravity, n, w):
 @njit(inline="always", **_KW)
 def _advance(i, n, w):
     """ω, ω̇ and a − g from joint origin i − 1 to joint origin i (rotation about u_i)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     f, e = _FR + i * FRAME, _FR + (i - 1) * FRAME
     sign = _AXIS_SIGN[i]
     for j in range(n):
@@ -395,6 +412,7 @@ def _advance(i, n, w):
 @njit(**_KW)
 def _inward(mass, xs, ys, n, w):
     """Inward recursion, the DSP split of the ground wrench, torques, power, ZMP."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     for j in range(n):
         w[_F + j] = w[_F + B + j] = w[_F + 2 * B + j] = 0.0
         w[_M + j] = w[_M + B + j] = w[_M + 2 * B + j] = 0.0
@@ -441,6 +459,7 @@ def _inward(mass, xs, ys, n, w):
 @njit(inline="always", **_KW)
 def _backward(i, mass, n, w):
     """Link i of the inward recursion: force and moment at origin i, m · u_i, eq. (4) sums."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     m_i = mass[i]
     f, lk = _FR + i * FRAME, _LK + i * LINK
     # where the child's force acts: the next origin, or the swing sole for the last link
@@ -472,6 +491,7 @@ def _backward(i, mass, n, w):
 @njit(inline="always", **_KW)
 def _swing_split(i, n, w):
     """Torque of joint i (row i of Table I) less the swing foot's share of the wrench; power."""
+    n = min(n, B)  # a bound on the trip count (module doc)
     f, lk = _FR + i * FRAME, _LK + i * LINK
     for j in range(n):
         fs0, fs1, fs2 = w[_FS + j], w[_FS + B + j], w[_FS + 2 * B + j]
@@ -497,6 +517,7 @@ def _margin(geometry, xs, ys, double, n, w):
     hull of both soles (each vertex moved by the swing sole's offset where an edge
     faces that way) and the margin that of an 8-vertex convex polygon.
     """
+    n = min(n, B)  # a bound on the trip count (module doc)
     heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
     # the corners (toe, −half), (toe, half), (−heel, half), (−heel, −half), each twice
     # (incoming edge, outgoing edge); edge k's outward normal is +x, +y, −x, −y

@@ -237,12 +237,18 @@ def grid_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.n
     return table.piece_of(timeline), timeline.t.copy()
 
 
+PROBE = 1e-3  # a probe's distance from a piece's end, in units of its sample spacing
+
+
 def limit_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
     """The GA's samples: the grid of ``timeline`` plus both one-sided limits of every piece.
 
     Each piece gets its two ends and the grid times strictly inside it, so every
     phase change is seen from both sides (last DSP sample, first SSP sample at the
-    same instant). Sorted by time, pieces in order.
+    same instant), and next to each end a probe ``PROBE`` of the sample spacing
+    inside: where the margin still falls going inwards from an end, the probe is a
+    local minimum of the samples and ``run.scores`` refines the bracket (end, probe,
+    next sample). Sorted by time, pieces in order.
 
     Returns:
         (piece index (m,), t [s] (m,)).
@@ -252,7 +258,9 @@ def limit_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.
     pieces, times = [], []
     for k, (t0, t1) in enumerate(table.floats[:, [T0, T1]]):
         inner = t[(t > t0 + eps) & (t < t1 - eps)]
-        ts = np.concatenate([[t0], inner, [t1]])
+        first, last = (inner[0], inner[-1]) if inner.size else (t1, t0)
+        probes = [t0 + PROBE * (first - t0), t1 - PROBE * (t1 - last)]
+        ts = np.concatenate([[t0, probes[0]], inner, [probes[1], t1]])
         pieces.append(np.full(ts.size, k))
         times.append(ts)
     return np.concatenate(pieces), np.concatenate(times)

@@ -145,10 +145,17 @@ def test_joint_gap_equals_the_numpy_joint_check(spec):
     params = ga_params(spec, 1.0, np.deg2rad(22.5))
     problem = GaitProblem(spec, params)
     X = np.random.default_rng(5).uniform(problem.bounds.xl, problem.bounds.xu, (400, 3))
-    _, _, gap = score(spec, params, X)
-    reference = joint_gap(spec, Timeline.of(params), X)
+    timeline = Timeline.of(params)
+    walk = kernel_walk(spec, timeline)
+    _, _, gap = walk.scores(params.slope, X, samples="grid")  # joint_gap's samples
+    reference = joint_gap(spec, timeline, X)
     assert np.isinf(gap).any() and (gap > 0).any() and (gap <= 0).any()
     np.testing.assert_allclose(gap, reference, atol=1e-12, rtol=0)
+    # the GA's samples (grid, piece ends, probes) see at least as much
+    _, _, ga_gap = score(spec, params, X)
+    finite = np.isfinite(gap)
+    assert np.array_equal(np.isfinite(ga_gap), finite)
+    assert (ga_gap[finite] >= gap[finite] - 1e-12).all()
 
 
 def test_the_ga_samples_see_both_sides_of_every_phase_change(spec):
