@@ -101,6 +101,7 @@ DT = Range(0.0, 0.1, "s")
 STEPS = Range(1, 1000, integer=True, low_open=False)
 SLOPE_DEG = Range(-60.0, 60.0, "deg", high_open=True)
 TILT_DEG = Range(-45.0, 45.0, "deg", high_open=True)
+SWAY_SHARE = Range(0.0, 1.0, low_open=False)  # w of the lean's shape (trajectory.lean_shape)
 MAX_SAMPLES = 1_000_000
 # Coulomb friction of the feet on the plane.  Rubber on dry concrete is about 1,
 # the grippiest soft elastomers about 2-3; 10 leaves room for a "never slips"

@@ -19,7 +19,7 @@ from planner.ik import tilted_plane_height, two_link_ik
 from planner.joints import RIGHT, principal_angle
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
-from planner.trajectory import Curve, GaitParams, Timeline, footprint_y
+from planner.trajectory import Curve, GaitParams, Timeline, blend, footprint_y
 from planner.zmp import (
     cop_of_wrench,
     foot_corners,
@@ -36,50 +36,66 @@ def evaluate_reference(spec, params: GaitParams, population) -> tuple[np.ndarray
 
     The numpy twin of ``plan.evaluate`` without its one-sided limits and refinement:
     the margin is the minimum over ``Timeline.of(params).t`` only.
+
+    Args:
+        population: Rows (Hz, Szmax, tilt) (the paper family, at ``params``' step
+            length, pelvis offset and sway share) or (Hz, Szmax, tilt, δ, L, w)
+            (``gait_search.EXTENDED``), shape (P, 3) or (P, 6).
     """
     pop = np.atleast_2d(np.asarray(population, dtype=float))
     walk = solve_reference(
-        spec, Timeline.of(params), params.slope, pop[:, 0], pop[:, 1], pop[:, 2],
-        strict=False, light=True,
-    )  # fmt: skip
+        spec, Timeline.of(params), params.slope, *pop.T, strict=False, light=True
+    )
     work, margin = walk["work"].sum(axis=1), walk["margin"].min(axis=1)
     bad = ~np.isfinite(work) | ~np.isfinite(margin)
     return np.where(bad, np.inf, work), np.where(bad, -np.inf, margin)
 
 
-def solve_reference(spec, timeline, slope, hip_height, lift, tilt, *, strict, light=False) -> dict:
+def solve_reference(
+    spec, timeline, slope, hip_height, lift, tilt, pelvis_offset=None, step_length=None,
+    sway_share=None, *, strict, light=False,
+) -> dict:  # fmt: skip
     """The pipeline for P parameter sets at once; every array gets a leading P axis.
 
     Args:
         spec: The robot. timeline: The walk's timing. slope: [rad].
         hip_height, lift, tilt: Hz [m], Szmax [m], tilt [rad], each shape (P,).
+        pelvis_offset, step_length, sway_share: δ [m], L [m], w [-], each shape (P,);
+            None: the timeline's (the paper family).
         strict: Raise ``UnreachableError`` on an unreachable target (else NaN there).
         light: Return only ``work`` (P, 8) and ``margin`` (P, n).
 
     Returns:
         The fields of ``plan.Plan`` by name, each with a leading P axis.
     """
-    P, n = hip_height.size, timeline.t.size
+    P, n = np.size(hip_height), timeline.t.size
     chain = Chain.from_spec(spec)
     gravity = gravity_in_slope(slope)
 
-    def col(x):  # one value per individual, as a column (P, 1)
-        return np.asarray(x, dtype=float).reshape(P, 1)
+    def col(x, default=None):  # one value per individual, as a column (P, 1)
+        x = default if x is None else x
+        return np.broadcast_to(np.asarray(x, dtype=float).reshape(-1, 1), (P, 1))
 
     def flat(a):  # (n,) or (P, n) → the flat batch of P·n samples
         return np.broadcast_to(a, (P, n)).reshape(-1)
 
     zeros = np.zeros((P, n))
+    delta = col(pelvis_offset, timeline.pelvis_offset)
+    length = col(step_length, timeline.step_length)
+    share = col(sway_share, timeline.sway_share)
+    unit = timeline.per_unit  # shapes per unit step length (linear in L), δ = 0
 
     stance = flat(timeline.stance)
-    lean = timeline.tilt_shape.scaled(col(tilt))
+    lean = blend(unit.hold_shape, unit.sway_shape, share).scaled(col(tilt))
     towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)  # +1: swing hip at +y
     z_swing = tilted_plane_height(
         timeline.lift_shape.scaled(col(lift)), towards_swing * spec.hip_width, lean
     )
     pelvis = Curve(col(hip_height) - spec.ankle_height + zeros, zeros, zeros)
     hip_w = tilted_plane_height(pelvis, towards_swing * spec.hip_width / 2, lean)
-    hip_u, sx = timeline.hip_x, timeline.swing_x
+    hip_u = unit.hip_x.scaled(length)
+    hip_u = Curve(hip_u.p + delta, hip_u.v, hip_u.a)
+    sx = unit.swing_x.scaled(length)
     stance_target = (
         Curve(*(flat(x) for x in (hip_u.p, hip_u.v, hip_u.a))),
         Curve(flat(hip_w.p), flat(hip_w.v), flat(hip_w.a)),
@@ -111,10 +127,10 @@ def solve_reference(spec, timeline, slope, hip_height, lift, tilt, *, strict, li
     )
     q = principal_angle(q)  # the joints' configuration (``planner.joints``)
 
-    feet_y = footprint_y(timeline, spec.hip_width, col(tilt)[:, 0])  # (P, N)
+    feet_y = footprint_y(timeline, spec.hip_width, col(tilt)[:, 0], share[:, 0])  # (P, N)
     step = np.minimum(timeline.step, timeline.steps - 1)
     stance_sole = np.stack(
-        [flat(timeline.stance_x), feet_y[:, step].reshape(-1), np.zeros(P * n)], axis=1
+        [flat(length * unit.stance_x), feet_y[:, step].reshape(-1), np.zeros(P * n)], axis=1
     )
     R, o = chain.poses(q, stance_sole, stance)
     dyn = inverse_dynamics_poses(chain, R, o, qd, qdd, stance, gravity)

@@ -15,11 +15,18 @@ A walk of N steps, each of duration T (the paper's step completion time t_c):
   mid-swing and touch-down; z rises to the lift Szmax at mid-swing; the foot
   stays parallel to the plane.
 * Frontal tilt λ(t): the lean of legs and pelvis about x_S (positive leans to the
-  right, −y), ±tilt towards the stance foot, in one of two shapes
-  (``Timeline.tilt_shape``). Both ankle rolls equal −λ.
+  right, −y), ±tilt towards the stance foot, shaped by the sway share w ∈ [0, 1]
+  (``Timeline.tilt_shape``): λ/tilt = (1 − w)·hold + w·sway, a blend of the lean
+  held through the SSP (w = 0, "hold", the paper's) and a continuous sway peaking at
+  mid-SSP (w = 1, "sway"). Both ankle rolls equal −λ.
+* Pelvis offset δ: the hip's x in S is the hip spline + δ at every instant (a
+  constant sagittal lean of the pelvis ahead of the feet, positive forward, i.e.
+  uphill on a positive slope); feet and footprints do not move.
 
-All three shapes are linear in Szmax and tilt, so a GA population only rescales
-basis curves computed once (see ``Timeline``).
+Every shape is linear in its parameter - Szmax, tilt, the step length L (hip x,
+swing x, stance x) and w (the blend) - so a GA population only rescales and blends
+basis curves computed once (see ``Timeline``): the extended gait family
+(``planner.gait_search``) searches δ, L and w per individual as well.
 
 Hip height Hz is the height of the pelvis centre (midway between the hip
 joints) above the plane, along its normal; the lift is the swing sole's height.
@@ -42,6 +49,9 @@ from planner.joints import LEFT, RIGHT
 
 MAX_SLOPE = np.deg2rad(60.0)
 TILT_PROFILES = ("sway", "hold")
+# The named profiles are the two ends of the sway share w; any other w is a "blend".
+SWAY_SHARES = {"hold": 0.0, "sway": 1.0}
+BLEND = "blend"
 
 # The nominal gait of any robot, as fractions of its own lengths, fixed so that the
 # paper's robot (sec. VII-A: ankle 0.032 m above the sole, L1 = L2 = 0.111 m) walks
@@ -62,10 +72,14 @@ NOMINAL_TILT = np.deg2rad(12.0)
 
 @dataclass(frozen=True)
 class GaitParams:
-    """What to walk: step time, slope and the three GA variables.
+    """What to walk: step time, slope and the GA variables.
 
     The defaults of the length fields are the paper's robot's; for any other robot
     use ``GaitParams.nominal(spec, ...)``, which derives them from the spec.
+
+    The lean's shape is given by ``tilt_profile`` ("hold" or "sway"), by
+    ``sway_share`` (w in [0, 1]), or by both when they agree; after construction
+    both are set: w = 0 is "hold", w = 1 "sway", anything between "blend".
 
     Attributes:
         step_time: Duration T of one step (DSP + SSP) [s], > 0.
@@ -77,7 +91,13 @@ class GaitParams:
         step_length: Swing-foot advance per step L [m], > 0.
         ssp_fraction: Single-support share of a step, in (0, 1).
         dt: Sample period of the plan [s].
-        tilt_profile: "sway" or "hold", the shape of λ(t) (``Timeline.tilt_shape``).
+        tilt_profile: "sway", "hold" or "blend", the shape of λ(t) (``Timeline.tilt_shape``);
+            None (default): from ``sway_share``, else "hold".
+        pelvis_offset: δ, the hip's constant x offset ahead of the hip spline in S [m],
+            finite, |δ| < thigh + shank (``check_fits``); positive forward (uphill on a
+            positive slope).
+        sway_share: w, the share of "sway" in the lean's shape [-], in [0, 1]; None
+            (default): from ``tilt_profile``.
     """
 
     step_time: float
@@ -89,7 +109,9 @@ class GaitParams:
     step_length: float = 0.111
     ssp_fraction: float = 0.6
     dt: float = 1e-3
-    tilt_profile: str = "hold"
+    tilt_profile: str | None = None
+    pelvis_offset: float = 0.0
+    sway_share: float | None = None
 
     def __post_init__(self) -> None:
         # Types and finiteness first: every later comparison may then trust a real number.
@@ -111,9 +133,13 @@ class GaitParams:
         _positive_length("step length", self.step_length)
         ranges.Range(0.0, 1.0, high_open=True).check("ssp fraction", self.ssp_fraction, GaitError)
         _check(
-            self.tilt_profile in TILT_PROFILES,
-            f"tilt profile {self.tilt_profile!r}: must be one of {', '.join(TILT_PROFILES)}",
+            _finite(self.pelvis_offset),
+            f"pelvis offset {ranges.show(self.pelvis_offset)} m: must be a finite length "
+            "(the robot's reach bounds it, ``check_fits``)",
         )
+        profile, share = lean_shape(self.tilt_profile, self.sway_share)
+        object.__setattr__(self, "tilt_profile", profile)
+        object.__setattr__(self, "sway_share", share)
         samples = self.samples
         _check(
             samples <= ranges.MAX_SAMPLES,
@@ -158,6 +184,11 @@ class GaitParams:
             f"step length {self.step_length:g} m: must lie in (0, {2 * reach:.4g}] m "
             f"for {spec.name} (two legs)",
         )
+        _check(
+            abs(self.pelvis_offset) < reach,
+            f"pelvis offset {self.pelvis_offset:g} m: must lie in ({-reach:.4g}, {reach:.4g}) m "
+            f"for {spec.name} (thigh + shank)",
+        )
 
     @classmethod
     def nominal(cls, spec, step_time: float, **overrides) -> GaitParams:
@@ -174,6 +205,34 @@ class GaitParams:
         }
         base.update(overrides)
         return cls(step_time=step_time, **base)
+
+
+def lean_shape(tilt_profile: str | None, sway_share) -> tuple[str, float]:
+    """(profile name, sway share w) of a lean given by either or both (``GaitParams``).
+
+    Raises:
+        GaitError: an unknown profile, w outside [0, 1], or the two disagreeing.
+    """
+    if tilt_profile is not None and tilt_profile not in (*TILT_PROFILES, BLEND):
+        raise GaitError(
+            f"tilt profile {tilt_profile!r}: must be one of {', '.join(TILT_PROFILES)} "
+            f"(or {BLEND} with a sway share in (0, 1))"
+        )
+    if sway_share is None:
+        if tilt_profile == BLEND:
+            raise GaitError("tilt profile 'blend': give its sway share in (0, 1)")
+        profile = tilt_profile or "hold"
+        return profile, SWAY_SHARES[profile]
+    ranges.SWAY_SHARE.check("sway share", sway_share, GaitError)
+    share = float(sway_share)
+    named = {v: k for k, v in SWAY_SHARES.items()}.get(share, BLEND)
+    if tilt_profile is not None and tilt_profile != named:
+        raise GaitError(
+            f"tilt profile {tilt_profile!r} and sway share {share:g}: disagree ("
+            + ", ".join(f"{k} is sway share {v:g}" for k, v in SWAY_SHARES.items())
+            + f", {BLEND} lies between)"
+        )
+    return named, share
 
 
 def _check(ok: bool, message: str) -> None:
@@ -214,8 +273,16 @@ class Curve:
 class Timeline:
     """Sample times, phases and the parameter-free shapes of a walk.
 
-    Built from the timing part of ``GaitParams`` only (T, N, L, f, dt); the lift
-    and tilt enter later as scale factors of ``lift_shape`` and ``tilt_shape``.
+    Built from the timing part of ``GaitParams`` (T, N, L, f, dt) and the shape of
+    its lean (w) and hip (δ); the lift and tilt enter later as scale factors of
+    ``lift_shape`` and ``tilt_shape``. The sample times depend on T, N, f and dt
+    only, so every individual of a population (its own L, δ, w) shares them; the
+    shapes for one individual are those of ``per_unit`` (L = 1, δ = 0) scaled by L
+    plus δ, and the blend ``(1 − w)·hold_shape + w·sway_shape``.
+
+    Attributes:
+        pelvis_offset: δ [m], added to ``hip_x``.
+        sway_share: w [-] of ``tilt_shape``; None: from ``tilt_profile`` (0 "hold", 1 "sway").
     """
 
     step_time: float
@@ -224,9 +291,13 @@ class Timeline:
     ssp_fraction: float
     dt: float
     tilt_profile: str = "hold"
+    pelvis_offset: float = 0.0
+    sway_share: float | None = None
     t: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
+        if self.sway_share is None:
+            object.__setattr__(self, "sway_share", SWAY_SHARES.get(self.tilt_profile, 0.0))
         duration = (self.steps + 1 - self.ssp_fraction) * self.step_time
         n = int(round(duration / self.dt)) + 1
         object.__setattr__(self, "t", np.linspace(0.0, duration, n))
@@ -240,7 +311,17 @@ class Timeline:
             params.ssp_fraction,
             params.dt,
             params.tilt_profile,
+            params.pelvis_offset,
+            params.sway_share,
         )
+
+    @cached_property
+    def per_unit(self) -> Timeline:
+        """The same timing with L = 1 m and δ = 0: the shapes per unit step length."""
+        return Timeline(
+            self.step_time, self.steps, 1.0, self.ssp_fraction, self.dt, self.tilt_profile,
+            0.0, self.sway_share,
+        )  # fmt: skip
 
     @property
     def dsp_time(self) -> float:
@@ -271,12 +352,16 @@ class Timeline:
 
     @cached_property
     def hip_x(self) -> Curve:
-        """Hip x relative to the stance ankle [m] (and its rates), shape (n,)."""
+        """Hip x relative to the stance ankle [m] (and its rates), shape (n,).
+
+        The spline through the step boundaries (the hip advances L/2 per step) plus
+        the pelvis offset δ, which moves the hip and not the feet.
+        """
         L, T, N = self.step_length, self.step_time, self.steps
         knots = np.append(np.arange(N) * T, self.t[-1])
         values = np.append((2 * np.arange(N) - 1) * L / 4, (2 * N - 1) * L / 4)
         curve = _spline(knots, values, self.t)
-        return Curve(curve.p - self.stance_x, curve.v, curve.a)
+        return Curve(curve.p - self.stance_x + self.pelvis_offset, curve.v, curve.a)
 
     @cached_property
     def swing_x(self) -> Curve:
@@ -295,22 +380,38 @@ class Timeline:
     def tilt_shape(self) -> Curve:
         """Frontal lean λ for a unit tilt [-], shape (n,): +1 leans towards step 0's stance.
 
-        "sway": one clamped cubic spline through 0 at start and end and ±1 at
-        mid-SSP of each step; the weight moves across during the whole step, as
-        in the natural lateral oscillation of a walking biped.
-        "hold": ±1 held through each SSP; in each DSP the paper's cubic
-        d0 + d1 t + d2 t² + d3 t³ with zero end rates carries λ from the previous
-        value to the next (quasi-static: the whole transfer happens in the DSP).
-        A sample on a phase change belongs to the phase ``in_ssp`` gives it and takes
-        that phase's one-sided value (the last DSP sample keeps the cubic's λ̈).
+        The blend (1 − w)·``hold_shape`` + w·``sway_shape`` of the sway share w;
+        w = 0 and w = 1 are the two shapes exactly.
+        """
+        return blend(self.hold_shape, self.sway_shape, self.sway_share)
+
+    @cached_property
+    def sway_shape(self) -> Curve:
+        """λ per unit tilt of "sway" (w = 1) [-], shape (n,).
+
+        One clamped cubic spline through 0 at start and end and ±1 at mid-SSP of each
+        step; the weight moves across during the whole step, as in the natural
+        lateral oscillation of a walking biped.
         """
         k = np.arange(self.steps)
         lean = np.where(k % 2 == 0, 1.0, -1.0)  # step 0 stands on the right foot: lean right
-        if self.tilt_profile == "sway":
-            knots = np.concatenate(
-                [[0.0], (k + 1 - self.ssp_fraction / 2) * self.step_time, [self.t[-1]]]
-            )
-            return _spline(knots, np.concatenate([[0.0], lean, [0.0]]), self.t)
+        knots = np.concatenate(
+            [[0.0], (k + 1 - self.ssp_fraction / 2) * self.step_time, [self.t[-1]]]
+        )
+        return _spline(knots, np.concatenate([[0.0], lean, [0.0]]), self.t)
+
+    @cached_property
+    def hold_shape(self) -> Curve:
+        """λ per unit tilt of "hold" (w = 0, the paper's) [-], shape (n,).
+
+        ±1 held through each SSP; in each DSP the paper's cubic d0 + d1 t + d2 t² +
+        d3 t³ with zero end rates carries λ from the previous value to the next
+        (quasi-static: the whole transfer happens in the DSP). A sample on a phase
+        change belongs to the phase ``in_ssp`` gives it and takes that phase's
+        one-sided value (the last DSP sample keeps the cubic's λ̈).
+        """
+        k = np.arange(self.steps)
+        lean = np.where(k % 2 == 0, 1.0, -1.0)
         before = np.concatenate([[0.0], lean])[self.step]
         after = np.append(lean, 0.0)[self.step]
         x = np.clip((self.t - self.step * self.step_time) / self.dsp_time, 0.0, 1.0)
@@ -322,11 +423,23 @@ class Timeline:
         )
 
     @cached_property
+    def touch_downs(self) -> np.ndarray:
+        """Sample index of each touch-down k = 0..N-1, shape (N,)."""
+        knots = (np.arange(self.steps) + 1) * self.step_time
+        return np.minimum(np.searchsorted(self.t, knots - 1e-9), self.t.size - 1)
+
+    @cached_property
     def landing_shape(self) -> np.ndarray:
         """λ (per unit tilt) at each touch-down k = 0..N-1, shape (N,)."""
-        knots = (np.arange(self.steps) + 1) * self.step_time
-        idx = np.minimum(np.searchsorted(self.t, knots - 1e-9), self.t.size - 1)
-        return self.tilt_shape.p[idx]
+        return self.tilt_shape.p[self.touch_downs]
+
+
+def blend(hold: Curve, sway: Curve, share) -> Curve:
+    """(1 − w)·hold + w·sway, w a scalar or a column (P, 1) [-]; exact at w = 0 and 1."""
+    keep = 1.0 - np.asarray(share, dtype=float)
+    return Curve(
+        *(keep * h + share * s for h, s in ((hold.p, sway.p), (hold.v, sway.v), (hold.a, sway.a)))
+    )
 
 
 def _spline(knots, values, t) -> Curve:
@@ -344,21 +457,30 @@ def _ssp_shape(timeline: Timeline, values) -> Curve:
     return Curve(spline(s), spline(s, 1) / ssp_time, spline(s, 2) / ssp_time**2)
 
 
-def footprint_y(timeline: Timeline, hip_width: float, tilt) -> np.ndarray:
+def footprint_y(timeline: Timeline, hip_width: float, tilt, sway_share=None) -> np.ndarray:
     """Lateral position of each step's stance sole in S [m].
 
     The first stance (right) foot is at −Lh/2. Each touch-down lands the swing
     sole at Lh / cos λ beside the stance sole (legs stay parallel in the frontal
-    plane and there is no hip roll), towards the swing side.
+    plane and there is no hip roll), towards the swing side; λ at touch-down is
+    the tilt times the landing shape of the lean, the blend of the hold and sway
+    shapes' by the sway share.
 
     Args:
         tilt: Peak tilt [rad], scalar or shape (P,).
+        sway_share: w [-], scalar or shape (P,); None: the timeline's.
 
     Returns:
         y of step k's stance sole, shape (N,) or (P, N).
     """
     tilt = np.asarray(tilt, dtype=float)[..., None]
-    lean = tilt * timeline.landing_shape  # (.., N)
+    if sway_share is None:
+        landing = timeline.landing_shape
+    else:
+        w = np.asarray(sway_share, dtype=float)[..., None]
+        idx = timeline.touch_downs
+        landing = (1.0 - w) * timeline.hold_shape.p[idx] + w * timeline.sway_shape.p[idx]
+    lean = tilt * landing  # (.., N)
     k = np.arange(timeline.steps)
     towards_swing = np.where(k % 2 == 0, 1.0, -1.0)  # step 0: stance right, swing left (+y)
     offsets = towards_swing * hip_width / np.cos(lean)
