@@ -5,6 +5,13 @@ peak frontal tilt - to minimise the joint work w (``plan.evaluate``) under the Z
 condition min margin ≥ 0. The paper's objective (eq. 6) is O = w + p with
 p = 10⁴ when the ZMP leaves the support polygon.
 
+Two gait families (``FAMILIES``): the paper's three variables, and the *extended*
+family x = (Hz, Szmax, θ1max, δ [m], L [m], w [-]) that also searches what real
+slope walkers change (``trajectory`` module doc): a sagittal pelvis offset δ
+(leaning into the slope), the step length L and the lateral-sway timing w (the
+share of the continuous sway in the lean's shape; 0 is the paper's hold). The
+paper family is the extended one at x[3:] = (0, the walk's L, its profile's w).
+
 Why two modules: ``planner`` imports numpy, scipy and numba only (DESIGN.md), so the problem
 *definition* lives here - the variables, their bounds derived from the spec's
 kinematics, the objective and constraint arrays and the paper's penalty - while
@@ -38,9 +45,12 @@ from planner.ik import tilted_plane_height, two_link_ik
 from planner.joints import JOINT_KINDS, RIGHT, principal_angle
 from planner.plan import score
 from planner.spec import RobotSpec
-from planner.trajectory import Curve, GaitParams, Timeline
+from planner.trajectory import Curve, GaitParams, Timeline, blend
 
 VARIABLES = ("hip_height", "swing_lift", "tilt")
+EXTENDED = (*VARIABLES, "pelvis_offset", "step_length", "sway_share")
+FAMILIES = {"paper": VARIABLES, "extended": EXTENDED}
+STEP_PER_THIGH = (0.5, 1.0)  # the extended family's step length L, as shares of the thigh
 CONSTRAINTS = ("penalty", "margin", "stability")
 PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
 MIN_CLEARANCE = 0.005  # [m] smallest swing lift searched: the sole clears the plane by 5 mm
@@ -51,13 +61,18 @@ _TILT_GRID = 61  # tilts tried when a bound is the best over all tilts
 
 @dataclass(frozen=True)
 class Bounds:
-    """Box of the search: lower and upper value of (Hz [m], Szmax [m], tilt [rad])."""
+    """Box of the search: lower and upper value of each variable of ``names``.
 
-    lower: tuple[float, float, float]
-    upper: tuple[float, float, float]
+    (Hz [m], Szmax [m], tilt [rad]) for the paper family, then (δ [m], L [m], w [-])
+    for the extended one.
+    """
+
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    names: tuple[str, ...] = VARIABLES
 
     def __post_init__(self) -> None:
-        for name, lo, hi in zip(VARIABLES, self.lower, self.upper, strict=True):
+        for name, lo, hi in zip(self.names, self.lower, self.upper, strict=True):
             if not lo < hi:
                 raise SlopewalkError(
                     f"{name} bounds [{lo:.4g}, {hi:.4g}]: empty; the robot's kinematics "
@@ -130,11 +145,16 @@ def tilt_bounds(spec: RobotSpec) -> tuple[float, float]:
     return -reach, reach
 
 
-def leg_vectors(spec: RobotSpec, timeline: Timeline, hip_height, lift, tilt):
+def leg_vectors(
+    spec: RobotSpec, timeline: Timeline, hip_height, lift, tilt, pelvis_offset=None,
+    step_length=None, sway_share=None,
+):  # fmt: skip
     """Hip-to-ankle vectors of both legs in their tilted planes, as ``plan._solve`` builds them.
 
     Args:
         hip_height, lift, tilt: Hz [m], Szmax [m], tilt [rad]; broadcastable, shape (P,).
+        pelvis_offset, step_length, sway_share: δ [m], L [m], w [-], broadcastable with
+            them; None: the timeline's.
 
     Returns:
         (u, w, cos_lean, lift_shape): u forward and w up in the leg plane [m], each
@@ -142,20 +162,31 @@ def leg_vectors(spec: RobotSpec, timeline: Timeline, hip_height, lift, tilt):
         cos λ, shape (P, n, 1); the unit lift shape ℓ(t), shape (1, n, 2) (0 for
         the stance leg).
     """
-    hz, lift, tilt = np.broadcast_arrays(
-        *(np.atleast_1d(np.asarray(a, float)) for a in (hip_height, lift, tilt))
+    defaults = (timeline.pelvis_offset, timeline.step_length, timeline.sway_share)
+    given = (pelvis_offset, step_length, sway_share)
+    hz, lift, tilt, delta, length, share = np.broadcast_arrays(
+        *(
+            np.atleast_1d(np.asarray(a, float))
+            for a in (
+                hip_height,
+                lift,
+                tilt,
+                *(d if g is None else g for g, d in zip(given, defaults, strict=True)),
+            )
+        )
     )
     n = timeline.t.size
     zeros = np.zeros((hz.size, n))
-    lean = timeline.tilt_shape.scaled(tilt[:, None])
+    unit = timeline.per_unit  # shapes per unit step length, δ = 0
+    lean = blend(unit.hold_shape, unit.sway_shape, share[:, None]).scaled(tilt[:, None])
     towards_swing = np.where(timeline.stance == RIGHT, 1.0, -1.0)
     pelvis = Curve(hz[:, None] - spec.ankle_height + zeros, zeros, zeros)
     hip_w = tilted_plane_height(pelvis, towards_swing * spec.hip_width / 2, lean).p
     z_swing = tilted_plane_height(
         timeline.lift_shape.scaled(lift[:, None]), towards_swing * spec.hip_width, lean
     ).p
-    hip_u = timeline.hip_x.p + zeros
-    u = np.stack([hip_u, hip_u - timeline.swing_x.p], axis=-1)
+    hip_u = length[:, None] * unit.hip_x.p + delta[:, None]
+    u = np.stack([hip_u, hip_u - length[:, None] * unit.swing_x.p], axis=-1)
     w = np.stack([hip_w, hip_w - z_swing], axis=-1)
     shape = np.stack([np.zeros(n), timeline.lift_shape.p], axis=-1)[None]
     return u, w, np.cos(lean.p)[..., None], shape
@@ -175,7 +206,7 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
     extremes from tan(q/2).
     """
     X = np.atleast_2d(np.asarray(population, dtype=float))
-    u, w, _, _ = leg_vectors(spec, timeline, X[:, 0], X[:, 1], X[:, 2])
+    u, w, _, _ = leg_vectors(spec, timeline, *X.T)
     zero = np.zeros(u.shape)
     with np.errstate(invalid="ignore", divide="ignore"):
         shank, thigh = two_link_ik(
@@ -199,9 +230,12 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
 
 
 def hip_height_bounds(
-    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float], lift: float
+    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float], lift: float, shapes=None
 ) -> tuple[float, float]:
     """Lowest and highest pelvis height Hz [m] any tilt in ``tilt_range`` admits.
+
+    ``shapes``: (δ, L, w) columns of the extended family's corners, shape (k, 3), each
+    tried with every tilt (``_shape_grid``); None: the timeline's own (the paper family).
 
     Lowest: the knees stay within their joint limits (d ≥ d_min of
     ``knee_distance_range``) at every sample, both legs, with the smallest lift.
@@ -214,8 +248,8 @@ def hip_height_bounds(
     with w₀ the value of w at h = 0.
     """
     d_min, d_max = knee_distance_range(spec)
-    tilts = np.linspace(*tilt_range, _TILT_GRID)
-    u, w0, c, _ = leg_vectors(spec, timeline, spec.ankle_height, lift, tilts)
+    tilts, extra = _shape_grid(tilt_range, shapes)
+    u, w0, c, _ = leg_vectors(spec, timeline, spec.ankle_height, lift, tilts, *extra)
     with np.errstate(invalid="ignore"):
         need = np.where(u**2 < d_min**2, c * (np.sqrt(d_min**2 - u**2) - w0), -np.inf)
         room = np.where(u**2 < d_max**2, c * (np.sqrt(d_max**2 - u**2) - w0), -np.inf)
@@ -225,7 +259,7 @@ def hip_height_bounds(
 
 
 def swing_lift_bounds(
-    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float]
+    spec: RobotSpec, timeline: Timeline, tilt_range: tuple[float, float], shapes=None
 ) -> tuple[float, float]:
     """Smallest and largest swing lift Szmax [m] worth searching.
 
@@ -234,8 +268,8 @@ def swing_lift_bounds(
     ≥ √(d_min² − u²) for every SSP sample (ℓ > 0), best over the tilts.
     """
     d_min, d_max = knee_distance_range(spec)
-    tilts = np.linspace(*tilt_range, _TILT_GRID)
-    u, w0, c, shape = leg_vectors(spec, timeline, spec.ankle_height, 0.0, tilts)
+    tilts, extra = _shape_grid(tilt_range, shapes)
+    u, w0, c, shape = leg_vectors(spec, timeline, spec.ankle_height, 0.0, tilts, *extra)
     with np.errstate(invalid="ignore", divide="ignore"):
         room = np.where(u**2 < d_max**2, c * (np.sqrt(d_max**2 - u**2) - w0), -np.inf)
         h = room.min(axis=(1, 2))[:, None, None]  # highest pelvis per tilt
@@ -247,13 +281,77 @@ def swing_lift_bounds(
     return MIN_CLEARANCE, float(lift.min(axis=(1, 2)).max())
 
 
-def gait_bounds(spec: RobotSpec, params: GaitParams) -> Bounds:
-    """The search box of (Hz, Szmax, tilt), from the spec's kinematics (see each bound)."""
+def _shape_grid(tilt_range, shapes):
+    """Every tilt of the grid with every (δ, L, w) row of ``shapes``: (tilts, (δ, L, w)),
+    each flat of the same length; (tilts, ()) when ``shapes`` is None."""
+    tilts = np.linspace(*tilt_range, _TILT_GRID)
+    if shapes is None:
+        return tilts, ()
+    shapes = np.atleast_2d(np.asarray(shapes, dtype=float))
+    t = np.repeat(tilts, len(shapes))
+    rows = np.tile(shapes, (tilts.size, 1))
+    return t, tuple(rows.T)
+
+
+def pelvis_offset_bounds(spec: RobotSpec) -> tuple[float, float]:
+    """Range of the pelvis offset δ [m] of the extended family: the sole's extent.
+
+    δ moves the hip, and with it most of the mass, ahead of the feet. A pelvis
+    held behind the heel (δ < −heel offset) or ahead of the toe (δ > ankle-to-toe)
+    would stand off the sole at the instant the hip spline passes over the stance
+    ankle, where a slow walk's ZMP sits under the pelvis: no gait there has the ZMP
+    inside, so the search stops at the sole's edges. Both lie well inside the
+    legs' reach (|δ| < thigh + shank, ``GaitParams.check_fits``); the reach at a
+    given Hz, L and tilt is each individual's own check (``plan.score``).
+    """
+    reach = spec.leg_reach
+    return max(-spec.heel_offset, -reach), min(spec.ankle_to_toe, reach)
+
+
+def step_length_bounds(spec: RobotSpec) -> tuple[float, float]:
+    """Range of the step length L [m] of the extended family: 0.5 … 1.0 × thigh.
+
+    The paper's L is the thigh length (``trajectory.NOMINAL_STEP_PER_THIGH``); real
+    slope walkers shorten their steps, so the search goes down to half of it and
+    not beyond the paper's (issue 10).
+    """
+    return STEP_PER_THIGH[0] * spec.thigh, STEP_PER_THIGH[1] * spec.thigh
+
+
+def extended_corners(spec: RobotSpec) -> np.ndarray:
+    """(δ, L, w) of the corners and centre lines of the extended box, shape (18, 3):
+    δ at both ends and 0, L at both ends and the middle, w 0 and 1 (the lean's two
+    shapes; a blend lies between them sample by sample)."""
+    d_lo, d_hi = pelvis_offset_bounds(spec)
+    l_lo, l_hi = step_length_bounds(spec)
+    grid = np.meshgrid([d_lo, 0.0, d_hi], [l_lo, 0.5 * (l_lo + l_hi), l_hi], [0.0, 1.0])
+    return np.column_stack([g.ravel() for g in grid])
+
+
+def gait_bounds(spec: RobotSpec, params: GaitParams, family: str = "paper") -> Bounds:
+    """The search box of a family, from the spec's kinematics (see each bound).
+
+    Paper: (Hz, Szmax, tilt) at the walk's own L, δ and w. Extended: also (δ, L, w),
+    with the Hz and Szmax bounds widened to what any corner of the (δ, L, w) box
+    admits with any tilt (``extended_corners``).
+    """
+    check_family(family)
     timeline = Timeline.of(params)
     tilts = tilt_bounds(spec)
-    lift = swing_lift_bounds(spec, timeline, tilts)
-    hz = hip_height_bounds(spec, timeline, tilts, lift[0])
-    return Bounds(lower=(hz[0], lift[0], tilts[0]), upper=(hz[1], lift[1], tilts[1]))
+    shapes = extended_corners(spec) if family == "extended" else None
+    lift = swing_lift_bounds(spec, timeline, tilts, shapes)
+    hz = hip_height_bounds(spec, timeline, tilts, lift[0], shapes)
+    lower, upper = [hz[0], lift[0], tilts[0]], [hz[1], lift[1], tilts[1]]
+    if family == "extended":
+        for lo, hi in (pelvis_offset_bounds(spec), step_length_bounds(spec), (0.0, 1.0)):
+            lower.append(lo)
+            upper.append(hi)
+    return Bounds(lower=tuple(lower), upper=tuple(upper), names=FAMILIES[family])
+
+
+def check_family(family: str) -> None:
+    if family not in FAMILIES:
+        raise SlopewalkError(f"gait family {family!r}: must be one of {', '.join(FAMILIES)}")
 
 
 def ga_params(spec: RobotSpec, step_time: float, slope: float, **overrides) -> GaitParams:
@@ -264,29 +362,40 @@ def ga_params(spec: RobotSpec, step_time: float, slope: float, **overrides) -> G
 
 @dataclass(frozen=True)
 class GaitProblem:
-    """Minimise the joint work over (Hz, Szmax, tilt) with the ZMP inside the polygon.
+    """Minimise the joint work over a family's variables with the ZMP inside the polygon.
 
     Attributes:
         spec: The robot.
-        params: Step time, slope, steps and sampling; its Hz, lift and tilt are ignored.
-        bounds: The search box (default: ``gait_bounds``).
+        params: Step time, slope, steps and sampling; its Hz, lift and tilt are ignored,
+            and in the extended family its δ, L and w too.
+        bounds: The search box (default: ``gait_bounds`` of the family).
+        family: "paper" (Hz, Szmax, tilt) or "extended" (and δ, L, w).
     """
 
     spec: RobotSpec
     params: GaitParams
     bounds: Bounds | None = None
+    family: str = "paper"
 
     def __post_init__(self) -> None:
+        check_family(self.family)
         if self.bounds is None:
-            object.__setattr__(self, "bounds", gait_bounds(self.spec, self.params))
+            object.__setattr__(self, "bounds", gait_bounds(self.spec, self.params, self.family))
 
     def measure(self, population) -> Measurement:
         """Plan every individual and check the joint limits (one compiled ``plan.score`` call).
 
         Args:
-            population: Rows (Hz [m], Szmax [m], tilt [rad]), shape (P, 3).
+            population: Rows of the family's variables: (Hz [m], Szmax [m], tilt [rad])
+                and, in the extended family, (δ [m], L [m], w [-]); shape (P, 3) or (P, 6).
         """
         X = np.atleast_2d(np.asarray(population, dtype=float))
+        width = len(FAMILIES[self.family])
+        if X.ndim != 2 or X.shape[1] != width:
+            raise SlopewalkError(
+                f"population of shape {X.shape}: the {self.family} family has {width} "
+                f"variables ({', '.join(FAMILIES[self.family])})"
+            )
         work, margin, gap = score(self.spec, self.params, X)
         return Measurement(work, margin, gap)
 

@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from planner.errors import UnreachableError
+from planner.errors import SlopewalkError, UnreachableError
 from planner.joints import JOINT_NAMES, stance_swing_to_left_right
 from planner.kernel import sample as sm
 from planner.kernel.run import kernel_walk
@@ -158,8 +158,7 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
     params.check_fits(spec)
     timeline = Timeline.of(params)
     walk = kernel_walk(spec, timeline)
-    x = np.array([[params.hip_height, params.swing_lift, params.tilt]])
-    rows = walk.series(params.slope, x)[0]
+    rows = walk.series(params.slope, columns(params, gait_row(params)))[0]
     _check_reach(spec, timeline.t, rows[:, sm.LEG_DISTANCE : sm.LEG_DISTANCE + 2])
 
     def cols(start, width, shape=()):
@@ -206,13 +205,47 @@ def _check_reach(spec: RobotSpec, t: np.ndarray, distance: np.ndarray) -> None:
             )
 
 
+def gait_row(params: GaitParams) -> np.ndarray:
+    """The six kernel columns of one gait, shape (1, 6): (Hz [m], Szmax [m], tilt [rad],
+    pelvis offset δ [m], step length L [m], sway share w [-])."""
+    return np.array(
+        [[params.hip_height, params.swing_lift, params.tilt, params.pelvis_offset,
+          params.step_length, params.sway_share]]
+    )  # fmt: skip
+
+
+def columns(params: GaitParams, population) -> np.ndarray:
+    """A population as the kernel's six columns, shape (P, 6).
+
+    Rows of 3 (Hz, Szmax, tilt: the paper family) get ``params``' δ, L and w; rows of 6
+    are taken as they are.
+
+    Raises:
+        SlopewalkError: any other shape.
+    """
+    pop = np.atleast_2d(np.asarray(population, dtype=float))
+    if pop.ndim != 2 or pop.shape[1] not in (3, 6):
+        raise SlopewalkError(
+            f"population of shape {pop.shape}: must be (P, 3) (Hz, Szmax, tilt) or (P, 6) "
+            "(and pelvis offset, step length, sway share)"
+        )
+    if pop.shape[1] == 6:
+        return np.ascontiguousarray(pop)
+    extra = [params.pelvis_offset, params.step_length, params.sway_share]
+    return np.column_stack([pop, np.broadcast_to(extra, (len(pop), 3))])
+
+
 def score(spec: RobotSpec, params: GaitParams, population):
     """Work, minimum ZMP margin and joint-limit gap of every individual of a population.
 
     Args:
         spec: The robot.
-        params: Step time, slope, steps, sampling (its Hz, lift and tilt are ignored).
-        population: Rows (hip_height [m], swing_lift [m], tilt [rad]), shape (P, 3).
+        params: Step time, slope, steps, sampling (its Hz, lift and tilt are ignored;
+            its δ, L and w too for rows of 6).
+        population: Rows (hip_height [m], swing_lift [m], tilt [rad]) of the paper
+            family, shape (P, 3), at ``params``' pelvis offset, step length and sway
+            share; or rows (…, pelvis_offset [m], step_length [m], sway_share [-]) of
+            the extended family, shape (P, 6) (``columns``).
 
     Returns:
         (work [J], min_margin [m], joint_gap [rad]), each shape (P,). The margin is the
@@ -220,8 +253,7 @@ def score(spec: RobotSpec, params: GaitParams, population):
         (q2..q7) past its limit over the samples (≤ 0 inside the limits). An individual
         whose legs cannot reach its targets gets work = inf, margin = −inf, gap = inf.
     """
-    pop = np.atleast_2d(np.asarray(population, dtype=float))
-    return kernel_walk(spec, Timeline.of(params)).scores(params.slope, pop)
+    return kernel_walk(spec, Timeline.of(params)).scores(params.slope, columns(params, population))
 
 
 def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:

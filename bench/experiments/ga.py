@@ -134,7 +134,7 @@ class _PymooProblem(Problem):
         n_constr = {"penalty": 0, "margin": 2, "stability": 1, "pareto": 1}[mode]
         n_obj = 2 if mode == "pareto" else 1
         b = problem.bounds
-        super().__init__(n_var=3, n_obj=n_obj, n_ieq_constr=n_constr, xl=b.xl, xu=b.xu)
+        super().__init__(n_var=b.xl.size, n_obj=n_obj, n_ieq_constr=n_constr, xl=b.xl, xu=b.xu)
 
     def _evaluate(self, X, out, *args, **kwargs):
         m = self.inner.measure(X)
