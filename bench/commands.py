@@ -27,7 +27,11 @@ def gait_from_args(args, spec):
         "slope": np.deg2rad(args.slope),
         "steps": args.steps,
         "tilt_profile": args.tilt_profile,
+        "sway_share": args.sway_share,
+        "pelvis_offset": args.pelvis_offset,
     }
+    if args.step_length is not None:
+        overrides["step_length"] = args.step_length
     if args.hip_height is not None:
         overrides["hip_height"] = args.hip_height
     if args.swing_lift is not None:
@@ -52,7 +56,9 @@ def plan(args) -> None:
     print(
         f"plan: {spec.name}, {p.steps} steps of {p.step_time:g} s on "
         f"{np.rad2deg(p.slope):g} deg, Hz {p.hip_height:.4f} m, lift {p.swing_lift:.4f} m, "
-        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.tilt_profile}), {plan.t.size} samples"
+        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.tilt_profile}, sway share {p.sway_share:g}), "
+        f"pelvis offset {p.pelvis_offset:.4f} m, step length {p.step_length:.4f} m, "
+        f"{plan.t.size} samples"
     )
     print(
         f"verdict: {summary['verdict']}  (min ZMP margin {summary['min_margin_m'] * 1e3:.2f} mm"

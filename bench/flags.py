@@ -123,8 +123,31 @@ def add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tru
     p.add_argument(
         "--tilt-profile",
         choices=("hold", "sway"),
-        default="hold",
-        help="lean shape: cubic transfer in DSP and hold, or sway",
+        default=None,
+        help="lean shape: cubic transfer in DSP and hold (default), or sway; the two ends "
+        "of --sway-share (hold 0, sway 1)",
+    )
+    p.add_argument(
+        "--sway-share",
+        type=number(ranges.SWAY_SHARE),
+        metavar="W",
+        help=f"lateral-sway timing w, in {ranges.SWAY_SHARE}: the lean's shape is (1 - w) x "
+        "hold + w x sway (default: --tilt-profile's, 0 for hold)",
+    )
+    p.add_argument(
+        "--pelvis-offset",
+        type=number(),
+        default=0.0,
+        metavar="M",
+        help="sagittal pelvis offset delta [m]: the hip held this far ahead of its spline "
+        "(positive forward, uphill on a positive slope), |delta| < thigh + shank (default 0)",
+    )
+    p.add_argument(
+        "--step-length",
+        type=number(),
+        metavar="M",
+        help="swing-foot advance per step L [m], in (0, 2 x (thigh + shank)] (default: the "
+        "thigh length)",
     )
     p.add_argument(
         "--steps",

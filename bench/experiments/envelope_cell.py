@@ -45,7 +45,8 @@ from bench.experiments.sweep_trials import TIMESTEP, spec_text
 from bench.sim.model import ACTUATOR_MODES
 from planner.spec import RobotSpec
 
-FAMILIES = ("paper",)  # (Hz, Szmax, θ1max), planner/gait_search.py
+# (Hz, Szmax, θ1max) and (…, δ, L, w): planner/gait_search.py's FAMILIES
+FAMILIES = ("paper", "extended")
 GAITS = ("maxmargin", "minwork")
 MAX_REPLANS = 256  # distinct candidates tried per gait when the best cannot be planned at 1 ms
 DENSE = 32  # of them, the best ones tried in order before the ranking is sampled
@@ -53,6 +54,8 @@ AGREEMENT_TOL = 1e-6  # [m] a 1 ms plan's margin may not fall further below the 
 REPLAN_NOTE = "not re-plannable:"  # the error of a gait passed over, not of a failed cell
 GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
                 "swing_lift_m", "tilt_deg")  # fmt: skip
+# the extended family's parameters (a paper row has its walk's: 0, the nominal L, w of "hold")
+EXTENDED_COLUMNS = ("pelvis_offset_m", "step_length_m", "sway_share")
 
 
 def sim_columns(gait: str, mode: str) -> tuple[str, str]:
@@ -60,7 +63,7 @@ def sim_columns(gait: str, mode: str) -> tuple[str, str]:
     return f"{gait}_{mode}_verdict", f"{gait}_{mode}_zmp_rms_mm"
 
 
-COLUMNS = (
+_V1_COLUMNS = (
     "cell_id",
     "step_time",  # [s], as written in the envelope file
     "slope_deg",
@@ -78,11 +81,22 @@ COLUMNS = (
     "ga_evaluations",
     "error",
 )
+# Columns: the first version's (paper family only) with each gait's (δ, L, w) after its tilt.
+COLUMNS = tuple(
+    c
+    for col in _V1_COLUMNS
+    for c in (
+        (col, *(f"{col.removesuffix('_tilt_deg')}_{e}" for e in EXTENDED_COLUMNS))
+        if col.endswith("_tilt_deg")
+        else (col,)
+    )
+)
 DECIMALS = {
     **{f"{g}_{c}": 4 for g in GAITS for c in ("margin_mm", "margin_1ms_mm")},
     **{f"{g}_work_J": 7 for g in GAITS},
     **{f"{g}_{c}": 7 for g in GAITS for c in ("hip_height_m", "swing_lift_m")},
     **{f"{g}_tilt_deg": 5 for g in GAITS},
+    **{f"{g}_{c}": 7 for g in GAITS for c in EXTENDED_COLUMNS},
     **{sim_columns(g, m)[1]: 4 for g in GAITS for m in ACTUATOR_MODES},
 }
 VERDICTS = ("", *SIMULATED_VERDICTS)  # "": not played (nothing found, or mode not asked)
@@ -92,6 +106,7 @@ ENVELOPE = TableFormat(
     DECIMALS,
     {"feasible": ("True", "False", "")}
     | {sim_columns(g, m)[0]: VERDICTS for g in GAITS for m in ACTUATOR_MODES},
+    previous_layouts=(_V1_COLUMNS,),
 )
 
 
@@ -178,14 +193,21 @@ class EnvelopeCell:
         """The GA's problem of this cell's family (``planner.gait_search.GaitProblem``)."""
         from planner.gait_search import GaitProblem, ga_params
 
-        return GaitProblem(
-            self.spec, ga_params(self.spec, self.step_time, self.slope, steps=self.steps)
-        )
+        params = ga_params(self.spec, self.step_time, self.slope, steps=self.steps)
+        return GaitProblem(self.spec, params, family=self.family)
 
     def gait(self, x):
-        """The walk of GA variables ``x`` at 1 ms (``GaitParams``)."""
+        """The walk of GA variables ``x`` at 1 ms (``GaitParams``): (Hz, Szmax, tilt), and
+        (δ, L, w) for the extended family."""
         from planner.trajectory import GaitParams
 
+        extra = {}
+        if len(x) == 6:
+            extra = {
+                "pelvis_offset": float(x[3]),
+                "step_length": float(x[4]),
+                "sway_share": float(x[5]),
+            }
         return GaitParams.nominal(
             self.spec,
             self.step_time,
@@ -194,6 +216,7 @@ class EnvelopeCell:
             hip_height=float(x[0]),
             swing_lift=float(x[1]),
             tilt=float(x[2]),
+            **extra,
         )
 
 
@@ -342,13 +365,13 @@ def _choose(cell, gait, pool, order, fallback, required, record_dir, simulate) -
             )
             continue
         found = margin >= (required if gait == "minwork" else 0.0)
-        columns = _gait_columns(gait, x, float(pool.work[i]), margin, found)
+        columns = _gait_columns(cell, gait, x, float(pool.work[i]), margin, found)
         columns[f"{gait}_margin_1ms_mm"] = fine * 1e3
         if simulate:
             columns |= _play(cell, gait, plan, record_dir if gait == "maxmargin" else None)
         return columns
     best_margin = fallback.margin + (required if gait == "minwork" else 0.0)
-    columns = _gait_columns(gait, fallback.x, fallback.work, best_margin, False)
+    columns = _gait_columns(cell, gait, fallback.x, fallback.work, best_margin, False)
     if failures:
         columns["error"] = (
             f"{REPLAN_NOTE} {gait}: none of the {len(failures)} best distinct gaits plans at "
@@ -370,7 +393,8 @@ def _spread(order: np.ndarray, X: np.ndarray) -> np.ndarray:
     return distinct[np.unique(np.concatenate([np.arange(DENSE), ranks]))]
 
 
-def _gait_columns(gait: str, x, work: float, margin: float, found: bool) -> dict:
+def _gait_columns(cell, gait: str, x, work: float, margin: float, found: bool) -> dict:
+    params = cell.gait(x)  # a paper row: the walk's own δ, L and w
     return {
         f"{gait}_found": bool(found),
         f"{gait}_margin_mm": margin * 1e3,
@@ -378,6 +402,9 @@ def _gait_columns(gait: str, x, work: float, margin: float, found: bool) -> dict
         f"{gait}_hip_height_m": float(x[0]),
         f"{gait}_swing_lift_m": float(x[1]),
         f"{gait}_tilt_deg": float(np.rad2deg(x[2])),
+        f"{gait}_pelvis_offset_m": params.pelvis_offset,
+        f"{gait}_step_length_m": params.step_length,
+        f"{gait}_sway_share": params.sway_share,
     }
 
 
