@@ -5,6 +5,8 @@ edge value itself where the range says open or closed), with the one-line messag
 that names the value and the range.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -29,6 +31,10 @@ from planner.trajectory import GaitParams
         ("ssp_fraction", 0.0, "ssp fraction 0.0: must lie in (0, 1)"),
         ("ssp_fraction", 1.0, "ssp fraction 1.0: must lie in (0, 1)"),
         ("tilt_profile", "wave", "tilt profile 'wave': must be one of sway, hold"),
+        ("tilt_profile", "blend", "tilt profile 'blend': give its sway share in (0, 1)"),
+        ("sway_share", -1e-9, "sway share -1e-09: must lie in [0, 1]"),
+        ("sway_share", 1.0 + 1e-9, "sway share 1.000000001: must lie in [0, 1]"),
+        ("pelvis_offset", np.inf, "pelvis offset inf m: must be a finite length"),
         ("dt", 0.0, "dt 0.0 s: must lie in (0, 0.1] s"),
         ("dt", 0.2, "dt 0.2 s: must lie in (0, 0.1] s"),
     ],
@@ -53,6 +59,9 @@ def test_out_of_range_is_refused_in_one_line(field, value, message):
         ("ssp_fraction", 0.99),
         ("ssp_fraction", 0.01),
         ("dt", 0.1),  # exactly step_time / 10
+        ("sway_share", 0.0),
+        ("sway_share", 1.0),
+        ("pelvis_offset", -0.02),
     ],
 )
 def test_edges_inside_the_range_are_accepted(field, value):
@@ -81,3 +90,42 @@ def test_population_batch_equals_planning_each_individual(spec):
         assert work[k] == pytest.approx(plan.work.sum(), rel=1e-3)
         assert plan.margin.min() - 2e-4 <= margin[k] <= plan.margin.min() + 1e-12
     assert len(set(np.round(work, 9))) == 3  # three different walks
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"tilt_profile": "sway", "sway_share": 0.5}, "tilt profile 'sway' and sway share 0.5"),
+        ({"tilt_profile": "hold", "sway_share": 1.0}, "tilt profile 'hold' and sway share 1"),
+        ({"tilt_profile": "blend", "sway_share": 0.0}, "tilt profile 'blend' and sway share 0"),
+        ({"sway_share": "half"}, "sway share 'half': must lie in [0, 1]"),
+        ({"sway_share": np.nan}, "sway share nan: must lie in [0, 1]"),
+    ],
+)
+def test_a_lean_given_twice_must_agree(fields, message):
+    with pytest.raises(GaitError) as error:
+        GaitParams(step_time=1.0, **fields)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize(
+    "fields, expected",
+    [
+        ({}, ("hold", 0.0)),
+        ({"tilt_profile": "sway"}, ("sway", 1.0)),
+        ({"sway_share": 0.0}, ("hold", 0.0)),
+        ({"sway_share": 1.0}, ("sway", 1.0)),
+        ({"sway_share": 0.25}, ("blend", 0.25)),
+        ({"tilt_profile": "blend", "sway_share": 0.25}, ("blend", 0.25)),
+    ],
+)
+def test_the_profile_names_the_ends_of_the_sway_share(fields, expected):
+    params = GaitParams(step_time=1.0, **fields)
+    assert (params.tilt_profile, params.sway_share) == expected
+    assert replace(params, dt=2e-3).sway_share == expected[1]  # a copy keeps its lean
+
+
+def test_a_pelvis_offset_past_the_legs_reach_is_refused_before_planning(spec):
+    with pytest.raises(GaitError) as error:
+        plan_walk(spec, GaitParams.nominal(spec, 1.0, pelvis_offset=-0.3))
+    assert "pelvis offset -0.3 m: must lie in (-0.222, 0.222) m" in str(error.value)

@@ -40,15 +40,33 @@ SERIES = {
 }
 
 
-def _population(spec, params, size, seed):
-    """Random individuals in the GA's box, reachable and within the joint limits."""
-    problem = GaitProblem(spec, params)
+def _population(spec, params, size, seed, family="paper"):
+    """Random individuals in the family's box, reachable and within the joint limits."""
+    problem = GaitProblem(spec, params, family=family)
     rng = np.random.default_rng(seed)
-    X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (8 * size, 3))
+    X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (8 * size, problem.bounds.xl.size))
     work, _, gap = score(spec, params, X)
     X = X[np.isfinite(work) & (gap <= 0)][:size]
     assert len(X) == size
     return X
+
+
+def _kernel_equals_reference(spec, params, timeline, X):
+    rows = kernel_walk(spec, timeline).series(params.slope, X)
+    reference = solve_reference(spec, timeline, params.slope, *X.T, strict=False)
+    for key, (start, width) in SERIES.items():
+        _close(
+            key, rows[..., start : start + width], reference[key].reshape(rows.shape[:2] + (-1,))
+        )
+    _close("stance_sole", rows[..., sm.STANCE_SOLE : sm.STANCE_SOLE + 3], reference["stance_sole"])
+    power = rows[..., sm.POWER_JOINTS : sm.POWER_JOINTS + 8]
+    _close("work", np.trapezoid(power, timeline.t, axis=1), reference["work"])
+    work, margin, _ = kernel_walk(spec, timeline).scores(
+        params.slope, X, samples="grid", refine=False
+    )
+    ref_work, ref_margin = evaluate_reference(spec, params, X)
+    _close("total work", work, ref_work)
+    _close("min margin", margin, ref_margin)
 
 
 def _close(name, kernel, reference, rtol=1e-9):
@@ -72,21 +90,33 @@ def test_kernel_equals_the_numpy_reference(spec, slope_deg, profile):
     params = ga_params(spec, step_time, np.deg2rad(slope_deg), tilt_profile=profile)
     X = _population(spec, params, 12, seed=int(slope_deg + 100))
     X[:, 2] *= np.where(np.arange(len(X)) % 2, 1.0, -1.0)  # both signs of the tilt
-    timeline = Timeline.of(params)
-    rows = kernel_walk(spec, timeline).series(params.slope, X)
-    reference = solve_reference(spec, timeline, params.slope, *X.T, strict=False)
-    for key, (start, width) in SERIES.items():
-        _close(
-            key, rows[..., start : start + width], reference[key].reshape(rows.shape[:2] + (-1,))
-        )
-    power = rows[..., sm.POWER_JOINTS : sm.POWER_JOINTS + 8]
-    _close("work", np.trapezoid(power, timeline.t, axis=1), reference["work"])
-    work, margin, _ = kernel_walk(spec, timeline).scores(
-        params.slope, X, samples="grid", refine=False
-    )
-    ref_work, ref_margin = evaluate_reference(spec, params, X)
-    _close("total work", work, ref_work)
-    _close("min margin", margin, ref_margin)
+    _kernel_equals_reference(spec, params, Timeline.of(params), X)
+
+
+@pytest.mark.parametrize("slope_deg", (-30.0, -15.0, 0.0, 15.0, 22.5, 35.0))
+def test_kernel_equals_the_numpy_reference_on_extended_gaits(spec, slope_deg):
+    """Random admissible (Hz, Szmax, tilt, δ, L, w) of the extended box: every series,
+    the work and the minimum margin, to 1e-9 of their scale, at each slope."""
+    step_time = 0.5 + (slope_deg + 30) / 65
+    params = ga_params(spec, step_time, np.deg2rad(slope_deg))
+    X = _population(spec, params, 12, seed=int(slope_deg + 200), family="extended")
+    X[:, 2] *= np.where(np.arange(len(X)) % 2, 1.0, -1.0)
+    X[:2, 5] = (0.0, 1.0)  # both named ends of the sway share
+    assert np.ptp(X[:, 3]) > 0.02 and np.ptp(X[:, 4]) > 0.02  # δ and L really vary
+    _kernel_equals_reference(spec, params, Timeline.of(params), X)
+
+
+@pytest.mark.parametrize("profile, share", [("hold", 0.0), ("sway", 1.0)])
+def test_six_columns_of_the_paper_family_are_its_three(spec, profile, share):
+    """(Hz, Szmax, tilt) on a walk of ``profile`` is (…, 0, L, w of the profile): the kernel's
+    rows are the same, whichever profile the walk of the six columns was built with."""
+    params = ga_params(spec, 0.8, np.deg2rad(10.0), tilt_profile=profile)
+    X = _population(spec, params, 4, seed=3)
+    full = np.column_stack([X, np.zeros(4), np.full(4, params.step_length), np.full(4, share)])
+    other = replace(params, tilt_profile="sway" if profile == "hold" else "hold", sway_share=None)
+    rows = kernel_walk(spec, Timeline.of(params)).series(params.slope, X)
+    rows6 = kernel_walk(spec, Timeline.of(other)).series(params.slope, full)
+    np.testing.assert_allclose(rows6, rows, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("slope_deg", (-20.0, 0.0, 22.5))
@@ -141,10 +171,12 @@ def test_plan_walk_is_the_reference_plan(spec):
         _close(key, getattr(plan, key), reference[key][0])
 
 
-def test_joint_gap_equals_the_numpy_joint_check(spec):
+@pytest.mark.parametrize("family", ["paper", "extended"])
+def test_joint_gap_equals_the_numpy_joint_check(spec, family):
     params = ga_params(spec, 1.0, np.deg2rad(22.5))
-    problem = GaitProblem(spec, params)
-    X = np.random.default_rng(5).uniform(problem.bounds.xl, problem.bounds.xu, (400, 3))
+    problem = GaitProblem(spec, params, family=family)
+    size = (400, problem.bounds.xl.size)
+    X = np.random.default_rng(5).uniform(problem.bounds.xl, problem.bounds.xu, size)
     timeline = Timeline.of(params)
     walk = kernel_walk(spec, timeline)
     _, _, gap = walk.scores(params.slope, X, samples="grid")  # joint_gap's samples
