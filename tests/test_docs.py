@@ -104,5 +104,16 @@ def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
     assert len(envelope_from_dict(tomllib.loads(example), base_dir=tmp_path).cells) == 15
 
 
+def test_envelope_doc_names_every_family_and_its_columns():
+    from bench.experiments.envelope_cell import EXTENDED_COLUMNS, FAMILIES
+
+    rows, text = _rows(ENVELOPE_DOC), ENVELOPE_DOC.read_text()
+    for family in FAMILIES:
+        assert f'`"{family}"`' in rows["family"][-2], family
+        assert f"- `{family}`:" in text, family
+    for column in EXTENDED_COLUMNS:
+        assert f"`{column}`" in text, column
+
+
 def test_readme_links_the_envelope_doc():
     assert f"]({ENVELOPE_DOC.relative_to(ROOT)})" in (ROOT / "README.md").read_text()

@@ -16,7 +16,7 @@ Format (degrees and millimetres at this edge, like the CLI)::
     population = 40      # in [2, 1000] (40)
     generations = 30     # in [1, 100000] (30)
     seed = 0             # in [0, 2^32 - 1] (0)
-    family = ["paper"]   # gait families searched, one row each ("paper")
+    family = ["paper"]   # gait families searched, one row each ("paper", "extended")
     required_margin = 5  # [mm] least ZMP margin of the least-work gait, in [0, 50] (5)
 
 Every key is checked: an unknown key, a value of the wrong type or out of its

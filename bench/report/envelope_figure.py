@@ -10,8 +10,10 @@ staircase along the cell borders, labelled on the line itself:
   (dotted) where the min-work gait exists;
 - the simulated walking boundary per actuator mode (the max-margin gait walks:
   verdict ``stable``), one colour per mode; a marker per cell says where MuJoCo
-  walks it in the first mode. Boundaries that coincide are drawn side by side
-  (each shifted a fraction of a cell), so none hides another.
+  walks it in the first mode; for every other family (the extended one) the
+  walking boundary of its own max-margin gaits in the first mode, dashed in that
+  mode's colour. Boundaries that coincide are drawn side by side (each shifted a
+  fraction of a cell), so none hides another.
 
 Cells sit at equal spacing with their real values as tick labels, so a grid
 denser near 15–30° stays readable. Degrees and millimetres only here.
@@ -91,6 +93,12 @@ def envelope_figure(rows: list[dict]):
         for n, (mode, colour) in enumerate(zip(modes, _MODE_COLOURS, strict=False)):
             offset = 0.12 * (n + 1)
             lines.append((base[f"walks_{mode}"], colour, "-", 2.4, f"MuJoCo {mode} walks", offset))
+        for k, family in enumerate(families[1:], start=1):  # their gaits, in the first mode
+            _, _, g = grids(sub, family)
+            if modes and f"walks_{modes[0]}" in g:
+                label = f"{family}: MuJoCo {modes[0]} walks"
+                offset = -0.12 * (k + 1)
+                lines.append((g[f"walks_{modes[0]}"], _MODE_COLOURS[0], "--", 2.4, label, offset))
         for n, (field, colour, style, width, label, offset) in enumerate(lines):
             _boundary(ax, field, colour, style, width, label, offset, (n + 0.5) / len(lines))
         ax.set_xlim(-0.6, len(slopes) - 0.2)
@@ -102,7 +110,11 @@ def envelope_figure(rows: list[dict]):
         ax.set_yticks(range(len(times)), [f"{t:g}" for t in times], fontsize=8)
         ax.set_xlabel("slope [deg]  (negative: downhill, positive: uphill)")
         ax.set_ylabel("step time t_c [s]  (faster: lower)")
-        dots = f"\ndots: MuJoCo {modes[0]} walks the max-margin gait; " if modes else "\n"
+        dots = (
+            f"\ndots: MuJoCo {modes[0]} walks the {families[0]} family's max-margin gait; "
+            if modes
+            else "\n"
+        )
         ax.set_title(
             f"Stability envelope, μ = {mu:g}, robot {robot}: colour = largest minimum ZMP margin "
             f"the GA found ({families[0]} family){dots}each line encloses the cells where its "

@@ -2,6 +2,7 @@
 
 import sys
 
+import numpy as np
 import pytest
 
 from bench.cli import main
@@ -49,7 +50,8 @@ def _with(section: str, **values) -> dict:
         (_with("search", population=4.5), "search.population = 4.5: must be an integer in"),
         (_with("search", generations=0), "search.generations = 0: must be an integer in [1,"),
         (_with("search", seed=-1), "search.seed = -1: must be an integer in [0, 4294967295]"),
-        (_with("search", family="wide"), "search.family = 'wide': must be one of paper"),
+        (_with("search", family="wide"), "search.family = 'wide': must be one of paper, extended"),
+        (_with("search", family=["paper", 3]), "search.family = 3: must be one of paper, extended"),
         (_with("search", family=[]), "search.family = []: must be a family name or"),
         (_with("search", required_margin=-1), "search.required_margin = -1 mm: must lie in [0,"),
         (_with("search", required_margin=60), "search.required_margin = 60 mm: must lie in"),
@@ -81,6 +83,19 @@ def test_defaults_and_the_cells(tmp_path):
         {"grid": {"step_time": [1.0], "slope": [0]}, "search": {"seed": 1}}, base_dir=tmp_path
     )
     assert other.cells[0].cell_id != config.cells[0].cell_id  # the search decides the row
+
+
+def test_both_families_give_one_cell_each(tmp_path):
+    data = _with("search", family=["paper", "extended"])
+    config = envelope_from_dict(data, base_dir=tmp_path)
+    paper = [c for c in config.cells if c.family == "paper"]
+    extended = [c for c in config.cells if c.family == "extended"]
+    assert len(paper) == len(extended) == len(config.cells) // 2 > 0
+    assert len({c.cell_id for c in config.cells}) == len(config.cells)
+    assert extended[0].problem().bounds.names[3:] == ("pelvis_offset", "step_length", "sway_share")
+    x = np.array([0.2, 0.05, 0.1, 0.01, 0.08, 0.4])
+    gait = extended[0].gait(x)
+    assert (gait.pelvis_offset, gait.step_length, gait.sway_share) == (0.01, 0.08, 0.4)
 
 
 def test_the_default_envelope_covers_the_papers_plane():

@@ -83,3 +83,38 @@ def test_each_boundary_is_drawn_around_its_cells_and_labelled():
 
     assert found(FEASIBLE) and found(WALKS) and found({(2.0, 0.0), (1.0, 0.0)})
     assert not found({(2.0, 0.0)})
+
+
+EXTENDED_FEASIBLE = FEASIBLE | {(0.5, 0.0), (0.5, 15.0), (2.0, 30.0)}
+EXTENDED_WALKS = {(2.0, 0.0), (1.0, 0.0), (0.5, 0.0), (0.5, 15.0)}
+
+
+def _two_families():
+    rows = _rows()
+    for r in list(rows):
+        cell = (r["step_time"], r["slope_deg"])
+        ok = cell in EXTENDED_FEASIBLE
+        rows.append(
+            r
+            | {
+                "family": "extended",
+                "feasible": str(ok),
+                "maxmargin_margin_mm": 7.0 if ok else -3.0,
+                "maxmargin_stiff_verdict": "stable" if cell in EXTENDED_WALKS else "tip",
+            }
+        )
+    return rows
+
+
+def test_both_families_analytic_and_walking_boundaries_are_drawn():
+    fig = envelope_figure(_two_families())
+    ax = fig.axes[0]
+    labels = {t.get_text() for t in ax.texts}
+    assert {"paper: ZMP inside", "extended: ZMP inside", "MuJoCo stiff walks"} <= labels
+    assert "extended: MuJoCo stiff walks" in labels
+    sizes = {len(c.get_segments()) for c in ax.collections if isinstance(c, LineCollection)}
+    for cells in (FEASIBLE, EXTENDED_FEASIBLE, WALKS, EXTENDED_WALKS):
+        assert len(edges(_field(cells))) in sizes
+    _, _, g = grids(_two_families(), "extended")
+    np.testing.assert_array_equal(g["feasible"], _field(EXTENDED_FEASIBLE))
+    np.testing.assert_array_equal(g["walks_stiff"], _field(EXTENDED_WALKS))
