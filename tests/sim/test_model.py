@@ -44,11 +44,17 @@ OFFSETS = {
     "foot": (0.004, 0.005, -0.015),
 }
 SPECS = ("bioloid", "offset_coms")
+# The nominal gait, and one of the extended family: the pelvis 12 mm ahead (leaning into
+# the slope), a 0.7-thigh step and a lean 40 % of the way from hold to sway.
+GAITS = {
+    "nominal": {},
+    "extended": {"step_length": 0.7 * 0.111, "sway_share": 0.4, "pelvis_offset": 0.012},
+}
 
 
 @pytest.fixture(scope="module")
 def robots(spec) -> dict:
-    """By name: (spec, chain, {slope: nominal 1 s-step walk})."""
+    """By name: (spec, chain, {(gait, slope): 1 s-step walk of ``GAITS[gait]``})."""
     offset = replace(
         spec,
         links={
@@ -58,7 +64,14 @@ def robots(spec) -> dict:
     )
     out = {}
     for name, robot in zip(SPECS, (spec, offset), strict=True):
-        walks = {s: plan_walk(robot, GaitParams.nominal(robot, 1.0, slope=s)) for s in SLOPES}
+        walks = {
+            (gait, s): plan_walk(
+                robot,
+                GaitParams.nominal(robot, 1.0, slope=s, **extra),
+            )
+            for gait, extra in GAITS.items()
+            for s in SLOPES
+        }
         out[name] = (robot, Chain.from_spec(robot), walks)
     return out
 
@@ -147,9 +160,10 @@ def _body_name(role: str, link: str, stance: int) -> str:
 
 @pytest.mark.parametrize("name", SPECS)
 @pytest.mark.parametrize("slope", SLOPES, ids=["flat", "slope15"])
-def test_kinematics_match_the_dh_chain(robots, name, slope):
+@pytest.mark.parametrize("gait", GAITS)
+def test_kinematics_match_the_dh_chain(robots, name, slope, gait):
     spec, chain, walks = robots[name]
-    plan = walks[slope]
+    plan = walks[gait, slope]
     keep = np.arange(0, plan.t.size, STRIDE)
     stance, stance_sole = plan.stance[keep], plan.stance_sole[keep]
     frames = chain.frames(plan.q[keep], stance_sole, stance)
@@ -184,9 +198,10 @@ def test_kinematics_match_the_dh_chain(robots, name, slope):
 
 @pytest.mark.parametrize("name", SPECS)
 @pytest.mark.parametrize("slope", SLOPES, ids=["flat", "slope15"])
-def test_inverse_dynamics_match_mj_inverse(robots, name, slope):
+@pytest.mark.parametrize("gait", GAITS)
+def test_inverse_dynamics_match_mj_inverse(robots, name, slope, gait):
     spec, chain, walks = robots[name]
-    plan = walks[slope]
+    plan = walks[gait, slope]
     gravity = gravity_in_slope(slope)
     single = np.flatnonzero(~plan.double_support)[::STRIDE]
     assert set(plan.stance[single]) == {0, 1}

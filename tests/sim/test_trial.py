@@ -49,6 +49,29 @@ def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
     assert result.zmp_rms < 0.006
 
 
+def test_a_played_extended_gait_lands_on_its_planned_footprints(spec):
+    """A slow extended gait (short steps, pelvis ahead, a blended lean) played stiff: MuJoCo
+    walks it, its joints track the plan, and both soles end where the plan puts them
+    (the short step's footprints, a quarter of a thigh short of the nominal ones)."""
+    gait = GaitParams.nominal(
+        spec, 2.0, step_length=0.75 * spec.thigh, pelvis_offset=0.01, sway_share=0.5
+    )
+    plan = plan_walk(spec, gait)
+    result = run_trial(spec, TrialSpec(gait), plan=plan)
+    print("\n".join(result.summary_lines()))
+    assert result.analytic_verdict == "stable" and result.simulated_verdict == "stable"
+    series = result.series
+    tracking = np.abs(series["q_simulated"] - series["q_planned"]).max()
+    assert tracking < 0.05, tracking
+    last = plan.stance[-1]
+    planned = np.empty((2, 3))
+    planned[last], planned[1 - last] = plan.stance_sole[-1], plan.swing_sole[-1]
+    error = np.abs(series["sole"][-1] - planned).max()
+    print(f"final soles: max |simulated - planned| {error * 1e3:.2f} mm")
+    assert error < 0.003  # the nominal step would put the front foot 55 mm farther
+    assert abs(planned[:, 0].max() - gait.steps * gait.step_length / 2) < 1e-9
+
+
 def test_fast_walk_falls_where_the_plan_leaves_the_foot(spec):
     result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 0.4)))
     assert result.analytic_verdict == "zmp_outside"
