@@ -3,8 +3,10 @@
 The envelope's half; the resumable table run (lock, partial table, resume, worker
 deaths, signals, progress) is the sweep's, ``batch.py``. A run directory holds
 ``envelope.partial.csv`` while a run is going and ``envelope.csv`` when it is
-done (columns: ``envelope_cell.ENVELOPE``), then ``envelope.png``; with
-``record``, ``recordings/<cell_id>.rrd``.
+done (columns: ``envelope_cell.ENVELOPE``), then ``envelope.png`` and
+``boundaries.md`` (per gait family: the fastest flat step time and the steepest
+slopes at 1 s, inside the polygon and walked in MuJoCo); with ``record``,
+``recordings/<cell_id>.rrd``.
 
 Convergence (``run_convergence``): a seeded 10 % of the cells is searched again
 with 4 × the generations (no MuJoCo: the question is the GA's), into
@@ -36,6 +38,7 @@ from bench.experiments.envelope_config import EnvelopeConfig
 
 RECORDINGS_DIR = "recordings"
 FIGURE_NAME = "envelope.png"
+BOUNDARIES_NAME = "boundaries.md"
 CELL_S = 2.5  # [s] per cell and worker, the first estimate (GA 2 x 3000 evaluations + 4 trials)
 CONVERGENCE_SHARE = 0.10
 CONVERGENCE_FACTOR = 4
@@ -164,6 +167,7 @@ def run_envelope(
         from bench.report.envelope_figure import write_figure
 
         write_figure(result.table, out_dir / FIGURE_NAME)
+        write_boundaries(result.table, out_dir / BOUNDARIES_NAME, config.source)
     return EnvelopeSummary(
         table=result.table,
         total=len(cells),
@@ -199,6 +203,18 @@ def _eta(start: float, total: int):
         return f", about {duration(left / rate)} left"
 
     return after_row
+
+
+def write_boundaries(table, path, source: str) -> Path:
+    """``boundaries.md`` (``envelope_claims.boundaries_markdown``) from a finished table."""
+    from bench.experiments.sweep_table import read_table
+    from bench.files import atomic_path
+    from bench.report.envelope_claims import boundaries_markdown
+
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(boundaries_markdown(read_table(table), source))
+    return path
 
 
 # --- convergence -----------------------------------------------------------------------------

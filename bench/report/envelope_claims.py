@@ -155,3 +155,91 @@ def envelope_cell_note(rows, slope_deg: float, cite: str) -> str:
         f"Szmax {cell['maxmargin_swing_lift_m']:.3f} m, θ1max {cell['maxmargin_tilt_deg']:.2f}°"
         f"), {minwork}; MuJoCo: {_sim_text(cell, modes)}"
     )
+
+
+def _of_family(rows, family: str) -> list[dict]:
+    return [
+        r
+        for r in rows
+        if r["family"] == family and r["friction"] == 1.0 and r["robot"] == "default"
+        if not is_failure(r["error"])
+    ]
+
+
+def family_boundaries(rows) -> dict[str, dict]:
+    """The envelope's boundaries per gait family (μ 1, the default robot), as claims 1-2 read them.
+
+    Per family: ``flat_inside`` the fastest flat step time [s] with a gait inside (None:
+    none), ``flat_walked`` {mode: the fastest flat step time MuJoCo walks}, ``up_inside``
+    and ``down_inside`` the steepest uphill and downhill slopes [deg] at t_c = 1 s with a
+    gait inside, ``up_walked`` and ``down_walked`` {mode: the same for MuJoCo}.
+    """
+    out = {}
+    families = sorted({r["family"] for r in rows}, key=lambda f: (f != "paper", f))
+    for family in families:
+        sub = _of_family(rows, family)
+        modes = _modes(sub)
+        flat = [r for r in sub if r["slope_deg"] == 0.0]
+        line = [r for r in sub if r["step_time"] == NOMINAL_STEP_TIME]
+
+        def best(cells, key, pick, ok):
+            values = [r[key] for r in cells if ok(r)]
+            return pick(values) if values else None
+
+        def inside(r):
+            return r["feasible"] == "True"
+
+        def uphill(r):
+            return r["slope_deg"] >= 0
+
+        def downhill(r):
+            return r["slope_deg"] <= 0
+
+        out[family] = {
+            "flat_inside": best(flat, "step_time", min, inside),
+            "flat_walked": {
+                m: best(flat, "step_time", min, lambda r, m=m: _walks(r, m)) for m in modes
+            },
+            "up_inside": best(line, "slope_deg", max, lambda r: uphill(r) and inside(r)),
+            "down_inside": best(line, "slope_deg", min, lambda r: downhill(r) and inside(r)),
+            "up_walked": {
+                m: best(line, "slope_deg", max, lambda r, m=m: uphill(r) and _walks(r, m))
+                for m in modes
+            },
+            "down_walked": {
+                m: best(line, "slope_deg", min, lambda r, m=m: downhill(r) and _walks(r, m))
+                for m in modes
+            },
+        }
+    return out
+
+
+def boundaries_markdown(rows, source: str) -> str:
+    """``boundaries.md``: ``family_boundaries`` as a table, one row per family."""
+
+    def show(value, unit):
+        return "none" if value is None else f"{value:g}{unit}"
+
+    def per_mode(values, unit):
+        return ", ".join(f"{m} {show(v, unit)}" for m, v in values.items()) or "not played"
+
+    lines = [
+        "# The envelope's boundaries per gait family",
+        "",
+        f"Written by `slopewalk envelope` with the table ({source}): per family, μ = 1, the "
+        "default robot. *Inside*: the GA's max-margin gait has its ZMP inside the support "
+        "polygon at every instant with every joint within its limits; *walked*: MuJoCo plays "
+        "that gait to the end with the verdict `stable`, per actuator mode. The slopes are "
+        f"those at t_c = {NOMINAL_STEP_TIME:g} s (negative: downhill).",
+        "",
+        "| family | flat: fastest t_c inside | flat: fastest t_c walked | "
+        "uphill inside | downhill inside | uphill walked | downhill walked |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for family, b in family_boundaries(rows).items():
+        lines.append(
+            f"| {family} | {show(b['flat_inside'], ' s')} | {per_mode(b['flat_walked'], ' s')} | "
+            f"{show(b['up_inside'], '°')} | {show(b['down_inside'], '°')} | "
+            f"{per_mode(b['up_walked'], '°')} | {per_mode(b['down_walked'], '°')} |"
+        )
+    return "\n".join(lines) + "\n"

@@ -42,7 +42,11 @@ def tiny(tmp_path_factory):
 
 def test_a_tiny_envelope_writes_one_row_per_cell_and_the_figure(tiny):
     _, out = tiny
-    assert sorted(p.name for p in out.iterdir()) == ["envelope.csv", "envelope.png"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "boundaries.md",
+        "envelope.csv",
+        "envelope.png",
+    ]
     data = (out / "envelope.csv").read_bytes()
     assert data.startswith(ENVELOPE.header)
     rows = read_table(out / "envelope.csv")

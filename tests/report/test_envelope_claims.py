@@ -62,3 +62,26 @@ def test_the_ga_rows_cite_the_envelope_cell():
     assert note.startswith("; envelope cell t_c 1 s, 22.5° (e.csv): feasible, largest margin 3.0")
     assert "no gait with margin ≥ 5 mm found; MuJoCo: stiff fall, servo tip" in note
     assert envelope_cell_note(ROWS, 30.0, "e.csv") == ""
+
+
+def test_boundaries_are_given_per_family():
+    from bench.report.envelope_claims import boundaries_markdown, family_boundaries
+
+    extended = [
+        {**_row(0.3, 0.0, True, False), "family": "extended"},
+        {**_row(1.0, 30.0, True, True), "family": "extended"},
+        {**_row(1.0, -30.0, True, False), "family": "extended"},
+        {**_row(1.0, -20.0, False, True), "family": "extended"},
+    ]
+    b = family_boundaries(ROWS[:-1] + extended)
+    assert list(b) == ["paper", "extended"]
+    paper, wide = b["paper"], b["extended"]
+    assert (paper["flat_inside"], paper["flat_walked"]) == (0.5, {"stiff": 0.7, "servo": None})
+    assert (paper["up_inside"], paper["down_inside"]) == (22.5, -10.0)
+    assert paper["up_walked"]["stiff"] == 25.0 and paper["down_walked"]["stiff"] == -10.0
+    assert (wide["flat_inside"], wide["flat_walked"]["stiff"]) == (0.3, None)
+    assert (wide["up_inside"], wide["down_inside"]) == (30.0, -30.0)
+    assert wide["down_walked"]["stiff"] == -20.0  # walked, though its ZMP leaves the polygon
+    text = boundaries_markdown(ROWS[:-1] + extended, "e.csv")
+    assert "| paper | 0.5 s | stiff 0.7 s, servo none | 22.5° | -10° |" in text
+    assert "| extended | 0.3 s | stiff none, servo none | 30° | -30° |" in text
