@@ -3,7 +3,7 @@
 import json
 import subprocess
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
@@ -135,6 +135,50 @@ def test_bounds_come_from_the_kinematics(spec, problem):
     assert knees_ok(b.lower[0] + 1e-4, b.lower[1]) and not knees_ok(b.lower[0] - 1e-4, b.lower[1])
     assert not knees_ok(b.upper[0] - 1e-4, b.upper[1] + 1e-3)
     assert gait_bounds(spec, params) == b
+
+
+def test_extended_bounds_come_from_the_foot_and_the_thigh(spec, problem):
+    """δ spans the sole about the ankle, L half to one thigh, w hold to sway; Hz and Szmax
+    widen to what the corners of that box admit, so the paper's box lies inside."""
+    ext = GaitProblem(spec, problem.params, family="extended").bounds
+    assert ext.names == ("hip_height", "swing_lift", "tilt", "pelvis_offset", "step_length",
+                         "sway_share")  # fmt: skip
+    assert ext.lower[3:] == pytest.approx((-spec.heel_offset, 0.5 * spec.thigh, 0.0))
+    assert ext.upper[3:] == pytest.approx((spec.ankle_to_toe, spec.thigh, 1.0))
+    paper = problem.bounds
+    assert ext.lower[2] == paper.lower[2] and ext.upper[2] == paper.upper[2]
+    assert ext.lower[0] < paper.lower[0] and ext.upper[0] > paper.upper[0]
+    assert ext.lower[1] == paper.lower[1] and ext.upper[1] > paper.upper[1]
+    timeline = Timeline.of(problem.params)
+    d_min, d_max = knee_distance_range(spec)
+    tilts = np.linspace(ext.lower[2], ext.upper[2], 61)
+
+    def knees_ok(hz, lift, delta, length, share):  # some tilt keeps both knees in range
+        u, w, _, _ = leg_vectors(spec, timeline, hz, lift, tilts, delta, length, share)
+        d = np.hypot(u, w)
+        return ((d >= d_min) & (d < d_max)).all(axis=(1, 2)).any()
+
+    # the lowest pelvis: a short step, the pelvis at the toe, swaying (measured over the corners)
+    short = (spec.ankle_to_toe, 0.5 * spec.thigh, 1.0)
+    assert knees_ok(ext.lower[0] + 1e-4, ext.lower[1], *short)
+    assert not knees_ok(ext.lower[0] - 1e-4, ext.lower[1], *short)
+    big = replace(
+        spec, thigh=2 * spec.thigh, shank=2 * spec.shank, foot_length=2 * spec.foot_length,
+        ankle_to_toe=2 * spec.ankle_to_toe,
+    )  # fmt: skip
+    wide = gait_bounds(big, ga_params(big, 1.0, problem.params.slope), "extended")
+    assert wide.lower[3] == pytest.approx(2 * ext.lower[3])
+    assert wide.upper[4] == pytest.approx(2 * ext.upper[4])
+
+
+def test_a_population_must_have_its_familys_columns(spec, problem):
+    with pytest.raises(SlopewalkError, match=r"the paper family has 3 variables"):
+        problem.measure(np.zeros((2, 6)))
+    extended = GaitProblem(spec, problem.params, family="extended")
+    with pytest.raises(SlopewalkError, match=r"the extended family has 6 variables"):
+        extended.measure(np.zeros((2, 3)))
+    with pytest.raises(SlopewalkError, match=r"gait family 'wide': must be one of paper, extended"):
+        GaitProblem(spec, problem.params, family="wide")
 
 
 def test_joint_check_agrees_with_the_planned_joint_angles(spec, problem):
