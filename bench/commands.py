@@ -56,7 +56,7 @@ def plan(args) -> None:
     print(
         f"plan: {spec.name}, {p.steps} steps of {p.step_time:g} s on "
         f"{np.rad2deg(p.slope):g} deg, Hz {p.hip_height:.4f} m, lift {p.swing_lift:.4f} m, "
-        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.tilt_profile}, sway share {p.sway_share:g}), "
+        f"tilt {np.rad2deg(p.tilt):.2f} deg ({p.lean_profile}, sway share {p.lean_share:g}), "
         f"pelvis offset {p.pelvis_offset:.4f} m, step length {p.step_length:.4f} m, "
         f"{plan.t.size} samples"
     )

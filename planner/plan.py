@@ -117,7 +117,8 @@ class Plan:
             file: A path or a binary file object (``np.savez_compressed`` target).
         """
         meta = {
-            "params": asdict(self.params),
+            "params": asdict(self.params)
+            | {"tilt_profile": self.params.lean_profile, "sway_share": self.params.lean_share},
             "spec": _spec_dict(self.spec),
             "joint_names": list(JOINT_NAMES),
             "summary": self.summary(),
@@ -210,7 +211,7 @@ def gait_row(params: GaitParams) -> np.ndarray:
     pelvis offset δ [m], step length L [m], sway share w [-])."""
     return np.array(
         [[params.hip_height, params.swing_lift, params.tilt, params.pelvis_offset,
-          params.step_length, params.sway_share]]
+          params.step_length, params.lean_share]]
     )  # fmt: skip
 
 
@@ -231,7 +232,7 @@ def columns(params: GaitParams, population) -> np.ndarray:
         )
     if pop.shape[1] == 6:
         return np.ascontiguousarray(pop)
-    extra = [params.pelvis_offset, params.step_length, params.sway_share]
+    extra = [params.pelvis_offset, params.step_length, params.lean_share]
     return np.column_stack([pop, np.broadcast_to(extra, (len(pop), 3))])
 
 

@@ -78,8 +78,10 @@ class GaitParams:
     use ``GaitParams.nominal(spec, ...)``, which derives them from the spec.
 
     The lean's shape is given by ``tilt_profile`` ("hold" or "sway"), by
-    ``sway_share`` (w in [0, 1]), or by both when they agree; after construction
-    both are set: w = 0 is "hold", w = 1 "sway", anything between "blend".
+    ``sway_share`` (w in [0, 1]), or by both when they agree (w = 0 is "hold",
+    w = 1 "sway", anything between "blend"); neither given is "hold". The fields
+    keep what was given (so ``replace(params, tilt_profile="sway")`` changes the
+    lean), ``lean_profile`` and ``lean_share`` what it resolves to.
 
     Attributes:
         step_time: Duration T of one step (DSP + SSP) [s], > 0.
@@ -92,12 +94,12 @@ class GaitParams:
         ssp_fraction: Single-support share of a step, in (0, 1).
         dt: Sample period of the plan [s].
         tilt_profile: "sway", "hold" or "blend", the shape of λ(t) (``Timeline.tilt_shape``);
-            None (default): from ``sway_share``, else "hold".
+            None (default): from ``sway_share``, else "hold" (``lean_profile``).
         pelvis_offset: δ, the hip's constant x offset ahead of the hip spline in S [m],
             finite, |δ| < thigh + shank (``check_fits``); positive forward (uphill on a
             positive slope).
         sway_share: w, the share of "sway" in the lean's shape [-], in [0, 1]; None
-            (default): from ``tilt_profile``.
+            (default): from ``tilt_profile`` (``lean_share``).
     """
 
     step_time: float
@@ -137,9 +139,7 @@ class GaitParams:
             f"pelvis offset {ranges.show(self.pelvis_offset)} m: must be a finite length "
             "(the robot's reach bounds it, ``check_fits``)",
         )
-        profile, share = lean_shape(self.tilt_profile, self.sway_share)
-        object.__setattr__(self, "tilt_profile", profile)
-        object.__setattr__(self, "sway_share", share)
+        lean_shape(self.tilt_profile, self.sway_share)
         samples = self.samples
         _check(
             samples <= ranges.MAX_SAMPLES,
@@ -147,6 +147,16 @@ class GaitParams:
             f"{samples:.3g} samples: must be <= {ranges.MAX_SAMPLES:.0e} (fewer steps, "
             "shorter steps or a longer dt)",
         )
+
+    @property
+    def lean_profile(self) -> str:
+        """The lean's shape by name: "hold" (w = 0), "sway" (w = 1) or "blend"."""
+        return lean_shape(self.tilt_profile, self.sway_share)[0]
+
+    @property
+    def lean_share(self) -> float:
+        """The sway share w [-] of the lean's shape (``Timeline.tilt_shape``)."""
+        return lean_shape(self.tilt_profile, self.sway_share)[1]
 
     @property
     def samples(self) -> int:
@@ -310,9 +320,9 @@ class Timeline:
             params.step_length,
             params.ssp_fraction,
             params.dt,
-            params.tilt_profile,
+            params.lean_profile,
             params.pelvis_offset,
-            params.sway_share,
+            params.lean_share,
         )
 
     @cached_property

@@ -404,7 +404,7 @@ def _gait_columns(cell, gait: str, x, work: float, margin: float, found: bool) -
         f"{gait}_tilt_deg": float(np.rad2deg(x[2])),
         f"{gait}_pelvis_offset_m": params.pelvis_offset,
         f"{gait}_step_length_m": params.step_length,
-        f"{gait}_sway_share": params.sway_share,
+        f"{gait}_sway_share": params.lean_share,
     }
 
 

@@ -119,7 +119,11 @@ class TrialResult:
         ``null_because`` says why for each such key; each event carries its ``phase``
         (``settling`` before the walk starts at t = 0, ``walk``, or ``hold`` after it).
         """
-        gait = asdict(self.trial.gait)
+        gait = asdict(self.trial.gait)  # the lean as resolved (both fields agree)
+        gait |= {
+            "tilt_profile": self.trial.gait.lean_profile,
+            "sway_share": self.trial.gait.lean_share,
+        }
         gait["slope_deg"] = float(np.rad2deg(gait.pop("slope")))
         gait["tilt_deg"] = float(np.rad2deg(gait.pop("tilt")))
         skip = ("trial", "series", "events", "predicted_events")

@@ -95,7 +95,7 @@ def test_both_families_give_one_cell_each(tmp_path):
     assert extended[0].problem().bounds.names[3:] == ("pelvis_offset", "step_length", "sway_share")
     x = np.array([0.2, 0.05, 0.1, 0.01, 0.08, 0.4])
     gait = extended[0].gait(x)
-    assert (gait.pelvis_offset, gait.step_length, gait.sway_share) == (0.01, 0.08, 0.4)
+    assert (gait.pelvis_offset, gait.step_length, gait.lean_share) == (0.01, 0.08, 0.4)
 
 
 def test_the_default_envelope_covers_the_papers_plane():

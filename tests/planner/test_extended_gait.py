@@ -27,7 +27,7 @@ def _walk(spec, params, source) -> dict:
         return {k: getattr(plan, k) for k in KEYS}
     x = [
         [params.hip_height], [params.swing_lift], [params.tilt], [params.pelvis_offset],
-        [params.step_length], [params.sway_share],
+        [params.step_length], [params.lean_share],
     ]  # fmt: skip
     out = solve_reference(spec, Timeline.of(params), params.slope, *np.array(x), strict=True)
     return {k: out[k][0] for k in KEYS}
@@ -133,7 +133,7 @@ def test_a_sway_share_between_blends_the_lean_and_the_footprints(spec, source):
     mid-SSP both shapes peak, so λ = ±tilt whatever w."""
     w, tilt = 0.3, np.deg2rad(10.0)
     params = GaitParams.nominal(spec, 0.9, sway_share=w, tilt=tilt)
-    assert params.tilt_profile == "blend"
+    assert params.lean_profile == "blend"
     walk = _walk(spec, params, source)
     t = Timeline.of(params)
     lean = tilt * ((1 - w) * t.hold_shape.p + w * t.sway_shape.p)
