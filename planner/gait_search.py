@@ -235,7 +235,10 @@ def hip_height_bounds(
     """Lowest and highest pelvis height Hz [m] any tilt in ``tilt_range`` admits.
 
     ``shapes``: (δ, L, w) columns of the extended family's corners, shape (k, 3), each
-    tried with every tilt (``_shape_grid``); None: the timeline's own (the paper family).
+    tried with every tilt (``_shape_grid``), of which those count where the knee's
+    limit binds and some height is left between both bounds (a pelvis leaning far
+    enough out never bends a knee to its limit, and its own reach caps it); None: the
+    timeline's own (the paper family).
 
     Lowest: the knees stay within their joint limits (d ≥ d_min of
     ``knee_distance_range``) at every sample, both legs, with the smallest lift.
@@ -253,8 +256,11 @@ def hip_height_bounds(
     with np.errstate(invalid="ignore"):
         need = np.where(u**2 < d_min**2, c * (np.sqrt(d_min**2 - u**2) - w0), -np.inf)
         room = np.where(u**2 < d_max**2, c * (np.sqrt(d_max**2 - u**2) - w0), -np.inf)
-    low = need.max(axis=(1, 2)).min()
-    high = room.min(axis=(1, 2)).max()
+    lows, highs = need.max(axis=(1, 2)), room.min(axis=(1, 2))
+    if shapes is not None:  # the corners where the knee decides and some Hz is left
+        viable = np.isfinite(lows) & np.isfinite(highs) & (lows < highs)
+        lows, highs = lows[viable], highs[viable]
+    low, high = lows.min(), highs.max()
     return spec.ankle_height + low, spec.ankle_height + high - 1e-6
 
 
@@ -278,7 +284,10 @@ def swing_lift_bounds(
             (c * w0 + h - c * np.sqrt(d_min**2 - u**2)) / shape,
             np.inf,
         )
-    return MIN_CLEARANCE, float(lift.min(axis=(1, 2)).max())
+    highest = lift.min(axis=(1, 2))
+    if shapes is not None:  # the corners where the knee decides and some pelvis height is left
+        highest = highest[np.isfinite(highest) & np.isfinite(h[:, 0, 0])]
+    return MIN_CLEARANCE, float(highest.max())
 
 
 def _shape_grid(tilt_range, shapes):
@@ -293,19 +302,24 @@ def _shape_grid(tilt_range, shapes):
     return t, tuple(rows.T)
 
 
-def pelvis_offset_bounds(spec: RobotSpec) -> tuple[float, float]:
-    """Range of the pelvis offset δ [m] of the extended family: the sole's extent.
+def pelvis_offset_bounds(spec: RobotSpec, slope: float = 0.0) -> tuple[float, float]:
+    """Range of the pelvis offset δ [m] of the extended family on a slope θs [rad].
 
-    δ moves the hip, and with it most of the mass, ahead of the feet. A pelvis
-    held behind the heel (δ < −heel offset) or ahead of the toe (δ > ankle-to-toe)
-    would stand off the sole at the instant the hip spline passes over the stance
-    ankle, where a slow walk's ZMP sits under the pelvis: no gait there has the ZMP
-    inside, so the search stops at the sole's edges. Both lie well inside the
-    legs' reach (|δ| < thigh + shank, ``GaitParams.check_fits``); the reach at a
-    given Hz, L and tilt is each individual's own check (``plan.score``).
+    δ moves the hip, and with it most of the mass, ahead of the feet. Held still,
+    the ZMP of eq. (4) is p_x = c_x − c_z tan θs (gravity in S has g_x/g_z = tan θs),
+    so a gait with the ZMP on the sole, x in [−heel offset, ankle-to-toe] about the
+    stance ankle, holds its CoM over [−heel, toe] + c_z tan θs at the instant the hip
+    spline passes over that ankle: leaning into the slope, forward uphill, back
+    downhill. No CoM is higher than the straight leg on its ankle, H = ankle height +
+    thigh + shank, so the box is the sole's extent widened on the slope's side by
+    H |tan θs| (a pelvis beyond it puts a slow walk's ZMP off the sole), and kept
+    inside the legs' reach (|δ| < thigh + shank, ``GaitParams.check_fits``); the
+    reach at a given Hz, L and tilt is each individual's own check (``plan.score``).
     """
     reach = spec.leg_reach
-    return max(-spec.heel_offset, -reach), min(spec.ankle_to_toe, reach)
+    lean = (spec.ankle_height + reach) * np.tan(slope)
+    low, high = -spec.heel_offset + min(lean, 0.0), spec.ankle_to_toe + max(lean, 0.0)
+    return float(max(low, -reach + 1e-6)), float(min(high, reach - 1e-6))
 
 
 def step_length_bounds(spec: RobotSpec) -> tuple[float, float]:
@@ -318,11 +332,11 @@ def step_length_bounds(spec: RobotSpec) -> tuple[float, float]:
     return STEP_PER_THIGH[0] * spec.thigh, STEP_PER_THIGH[1] * spec.thigh
 
 
-def extended_corners(spec: RobotSpec) -> np.ndarray:
-    """(δ, L, w) of the corners and centre lines of the extended box, shape (18, 3):
-    δ at both ends and 0, L at both ends and the middle, w 0 and 1 (the lean's two
-    shapes; a blend lies between them sample by sample)."""
-    d_lo, d_hi = pelvis_offset_bounds(spec)
+def extended_corners(spec: RobotSpec, slope: float = 0.0) -> np.ndarray:
+    """(δ, L, w) of the corners and centre lines of the extended box on a slope θs [rad],
+    shape (18, 3): δ at both ends and 0, L at both ends and the middle, w 0 and 1 (the
+    lean's two shapes; a blend lies between them sample by sample)."""
+    d_lo, d_hi = pelvis_offset_bounds(spec, slope)
     l_lo, l_hi = step_length_bounds(spec)
     grid = np.meshgrid([d_lo, 0.0, d_hi], [l_lo, 0.5 * (l_lo + l_hi), l_hi], [0.0, 1.0])
     return np.column_stack([g.ravel() for g in grid])
@@ -332,18 +346,25 @@ def gait_bounds(spec: RobotSpec, params: GaitParams, family: str = "paper") -> B
     """The search box of a family, from the spec's kinematics (see each bound).
 
     Paper: (Hz, Szmax, tilt) at the walk's own L, δ and w. Extended: also (δ, L, w),
-    with the Hz and Szmax bounds widened to what any corner of the (δ, L, w) box
-    admits with any tilt (``extended_corners``).
+    with the Hz and Szmax bounds widened to what any corner of the flat-ground (δ, L,
+    w) box admits with any tilt (``extended_corners``).
     """
     check_family(family)
     timeline = Timeline.of(params)
     tilts = tilt_bounds(spec)
+    # Hz and Szmax: what the legs admit at the corners of the flat-ground box (δ on the
+    # sole); a pelvis leaning further into a slope is searched at those heights (leant far
+    # enough out, no knee reaches its limit and the knee bound would not be finite)
     shapes = extended_corners(spec) if family == "extended" else None
     lift = swing_lift_bounds(spec, timeline, tilts, shapes)
     hz = hip_height_bounds(spec, timeline, tilts, lift[0], shapes)
     lower, upper = [hz[0], lift[0], tilts[0]], [hz[1], lift[1], tilts[1]]
     if family == "extended":
-        for lo, hi in (pelvis_offset_bounds(spec), step_length_bounds(spec), (0.0, 1.0)):
+        for lo, hi in (
+            pelvis_offset_bounds(spec, params.slope),
+            step_length_bounds(spec),
+            (0.0, 1.0),
+        ):
             lower.append(lo)
             upper.append(hi)
     return Bounds(lower=tuple(lower), upper=tuple(upper), names=FAMILIES[family])

@@ -25,6 +25,7 @@ from planner.gait_search import (
     Bounds,
     GaitProblem,
     Measurement,
+    extended_corners,
     ga_params,
     gait_bounds,
     joint_gap,
@@ -137,14 +138,23 @@ def test_bounds_come_from_the_kinematics(spec, problem):
     assert gait_bounds(spec, params) == b
 
 
-def test_extended_bounds_come_from_the_foot_and_the_thigh(spec, problem):
-    """δ spans the sole about the ankle, L half to one thigh, w hold to sway; Hz and Szmax
-    widen to what the corners of that box admit, so the paper's box lies inside."""
+def test_extended_bounds_come_from_the_foot_the_slope_and_the_thigh(spec, problem):
+    """δ spans the sole about the ankle, widened into the slope by the straight leg's height
+    times tan θs; L half to one thigh, w hold to sway; Hz and Szmax widen to what the corners
+    of the flat-ground box admit, so the paper's box lies inside. Lengths scale with the
+    robot."""
     ext = GaitProblem(spec, problem.params, family="extended").bounds
     assert ext.names == ("hip_height", "swing_lift", "tilt", "pelvis_offset", "step_length",
                          "sway_share")  # fmt: skip
+    lean = (spec.ankle_height + spec.thigh + spec.shank) * np.tan(np.deg2rad(22.5))
     assert ext.lower[3:] == pytest.approx((-spec.heel_offset, 0.5 * spec.thigh, 0.0))
-    assert ext.upper[3:] == pytest.approx((spec.ankle_to_toe, spec.thigh, 1.0))
+    assert ext.upper[3:] == pytest.approx((spec.ankle_to_toe + lean, spec.thigh, 1.0))
+    down = gait_bounds(spec, ga_params(spec, 1.0, np.deg2rad(-22.5)), "extended")
+    assert (down.lower[3], down.upper[3]) == pytest.approx(
+        (-spec.heel_offset - lean, ext.lower[3] + spec.foot_length)
+    )
+    flat = gait_bounds(spec, ga_params(spec, 1.0, 0.0), "extended")
+    assert (flat.lower[3], flat.upper[3]) == pytest.approx((-spec.heel_offset, spec.ankle_to_toe))
     paper = problem.bounds
     assert ext.lower[2] == paper.lower[2] and ext.upper[2] == paper.upper[2]
     assert ext.lower[0] < paper.lower[0] and ext.upper[0] > paper.upper[0]
@@ -153,22 +163,22 @@ def test_extended_bounds_come_from_the_foot_and_the_thigh(spec, problem):
     d_min, d_max = knee_distance_range(spec)
     tilts = np.linspace(ext.lower[2], ext.upper[2], 61)
 
-    def knees_ok(hz, lift, delta, length, share):  # some tilt keeps both knees in range
-        u, w, _, _ = leg_vectors(spec, timeline, hz, lift, tilts, delta, length, share)
-        d = np.hypot(u, w)
-        return ((d >= d_min) & (d < d_max)).all(axis=(1, 2)).any()
+    def knees_ok(hz):  # some corner of (δ, L, w) and some tilt keep both knees in range
+        for corner in extended_corners(spec):  # δ within the sole: the flat-ground box
+            u, w, _, _ = leg_vectors(spec, timeline, hz, ext.lower[1], tilts, *corner)
+            d = np.hypot(u, w)
+            if ((d >= d_min) & (d < d_max)).all(axis=(1, 2)).any():
+                return True
+        return False
 
-    # the lowest pelvis: a short step, the pelvis at the toe, swaying (measured over the corners)
-    short = (spec.ankle_to_toe, 0.5 * spec.thigh, 1.0)
-    assert knees_ok(ext.lower[0] + 1e-4, ext.lower[1], *short)
-    assert not knees_ok(ext.lower[0] - 1e-4, ext.lower[1], *short)
+    assert knees_ok(ext.lower[0] + 1e-4) and not knees_ok(ext.lower[0] - 1e-4)
     big = replace(
         spec, thigh=2 * spec.thigh, shank=2 * spec.shank, foot_length=2 * spec.foot_length,
-        ankle_to_toe=2 * spec.ankle_to_toe,
+        ankle_to_toe=2 * spec.ankle_to_toe, ankle_height=2 * spec.ankle_height,
     )  # fmt: skip
     wide = gait_bounds(big, ga_params(big, 1.0, problem.params.slope), "extended")
-    assert wide.lower[3] == pytest.approx(2 * ext.lower[3])
-    assert wide.upper[4] == pytest.approx(2 * ext.upper[4])
+    np.testing.assert_allclose(wide.xl[3:5], 2 * ext.xl[3:5], rtol=1e-12)
+    np.testing.assert_allclose(wide.xu[3:5], 2 * ext.xu[3:5], rtol=1e-12)
 
 
 def test_a_population_must_have_its_familys_columns(spec, problem):

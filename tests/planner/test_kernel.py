@@ -44,7 +44,8 @@ def _population(spec, params, size, seed, family="paper"):
     """Random individuals in the family's box, reachable and within the joint limits."""
     problem = GaitProblem(spec, params, family=family)
     rng = np.random.default_rng(seed)
-    X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (8 * size, problem.bounds.xl.size))
+    draws = 8 if family == "paper" else 64  # a few % of the extended box is admissible
+    X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (draws * size, problem.bounds.xl.size))
     work, _, gap = score(spec, params, X)
     X = X[np.isfinite(work) & (gap <= 0)][:size]
     assert len(X) == size
