@@ -172,7 +172,8 @@ def family_boundaries(rows) -> dict[str, dict]:
     Per family: ``flat_inside`` the fastest flat step time [s] with a gait inside (None:
     none), ``flat_walked`` {mode: the fastest flat step time MuJoCo walks}, ``up_inside``
     and ``down_inside`` the steepest uphill and downhill slopes [deg] at t_c = 1 s with a
-    gait inside, ``up_walked`` and ``down_walked`` {mode: the same for MuJoCo}.
+    gait inside, ``up_walked`` and ``down_walked`` {mode: the same for MuJoCo}, and
+    ``edges``: the grid's fastest flat step time and steepest slopes at 1 s.
     """
     out = {}
     families = sorted({r["family"] for r in rows}, key=lambda f: (f != "paper", f))
@@ -196,6 +197,11 @@ def family_boundaries(rows) -> dict[str, dict]:
             return r["slope_deg"] <= 0
 
         out[family] = {
+            "edges": {  # the grid's own extremes: a boundary there may lie beyond the grid
+                "flat": best(flat, "step_time", min, lambda r: True),
+                "up": best(line, "slope_deg", max, lambda r: True),
+                "down": best(line, "slope_deg", min, lambda r: True),
+            },
             "flat_inside": best(flat, "step_time", min, inside),
             "flat_walked": {
                 m: best(flat, "step_time", min, lambda r, m=m: _walks(r, m)) for m in modes
@@ -217,11 +223,12 @@ def family_boundaries(rows) -> dict[str, dict]:
 def boundaries_markdown(rows, source: str) -> str:
     """``boundaries.md``: ``family_boundaries`` as a table, one row per family."""
 
-    def show(value, unit):
-        return "none" if value is None else f"{value:g}{unit}"
+    def show(value, unit, edge=None):
+        text = "none" if value is None else f"{value:g}{unit}"
+        return text + (" (grid edge)" if value is not None and value == edge else "")
 
-    def per_mode(values, unit):
-        return ", ".join(f"{m} {show(v, unit)}" for m, v in values.items()) or "not played"
+    def per_mode(values, unit, edge):
+        return ", ".join(f"{m} {show(v, unit, edge)}" for m, v in values.items()) or "not played"
 
     lines = [
         "# The envelope's boundaries per gait family",
@@ -237,9 +244,16 @@ def boundaries_markdown(rows, source: str) -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for family, b in family_boundaries(rows).items():
+        e = b["edges"]
         lines.append(
-            f"| {family} | {show(b['flat_inside'], ' s')} | {per_mode(b['flat_walked'], ' s')} | "
-            f"{show(b['up_inside'], '°')} | {show(b['down_inside'], '°')} | "
-            f"{per_mode(b['up_walked'], '°')} | {per_mode(b['down_walked'], '°')} |"
+            f"| {family} | {show(b['flat_inside'], ' s', e['flat'])} | "
+            f"{per_mode(b['flat_walked'], ' s', e['flat'])} | "
+            f"{show(b['up_inside'], '°', e['up'])} | {show(b['down_inside'], '°', e['down'])} | "
+            f"{per_mode(b['up_walked'], '°', e['up'])} | "
+            f"{per_mode(b['down_walked'], '°', e['down'])} |"
         )
+    lines += [
+        "",
+        "*(grid edge)*: the boundary lies at or beyond the grid's last step time or slope.",
+    ]
     return "\n".join(lines) + "\n"

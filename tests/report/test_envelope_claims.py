@@ -84,4 +84,5 @@ def test_boundaries_are_given_per_family():
     assert wide["down_walked"]["stiff"] == -20.0  # walked, though its ZMP leaves the polygon
     text = boundaries_markdown(ROWS[:-1] + extended, "e.csv")
     assert "| paper | 0.5 s | stiff 0.7 s, servo none | 22.5° | -10° |" in text
-    assert "| extended | 0.3 s | stiff none, servo none | 30° | -30° |" in text
+    assert "| extended | 0.3 s (grid edge) | stiff none, servo none | 30° (grid edge) | " in text
+    assert b["paper"]["edges"] == {"flat": 0.4, "up": 25.0, "down": -20.0}
