@@ -27,6 +27,7 @@ def _spec(old: str, new: str, count: int = 1) -> str:
     return SPEC.replace(old, new, count)
 
 
+ENVELOPE = "[grid]\nstep_time = [1.0]\nslope = [0]\n"
 THIGH_INERTIA = "inertia = [8.150e-5, 7.450e-5, 2.050e-5]"
 INPUTS = {  # file name in {in} -> content
     "nan_com.toml": _spec("com = [0.0, 0.0, -0.070]", "com = [nan, 0.0, -0.070]"),
@@ -61,6 +62,12 @@ INPUTS = {  # file name in {in} -> content
     "empty_list.json": "[]",
     "broken.json": "[{",
     "a_file": "not a folder\n",
+    "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
+    "envelope_name.toml": ENVELOPE + 'controller = ["ankle_cop_feedback"]\n',
+    "envelope_number.toml": ENVELOPE + "controller = [1]\n",
+    "envelope_clash.toml": ENVELOPE  # two callables of one name: their columns would clash
+    + 'controller = ["bench.controllers:load_controller",'
+    + ' "bench.sim.closed_loop:load_controller"]\n',
 }
 
 PLAN = ["plan", "--step-time", "1"]
@@ -74,6 +81,7 @@ DEFAULT_OUT = {  # an --out is added where a row has none
     "compare": "{out}/c.md",
     "sweep": "{out}",
     "controllers": "{out}/c.md",
+    "envelope": "{out}",
 }
 CASES = [
     # numbers at the command line
@@ -143,6 +151,23 @@ CASES = [
     (["controllers", "--controller", "no_such_module:f"], "no module named 'no_such_module'"),
     (["controllers", "--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
     (["controllers", "--out", "{out}"], "--out '{out}': is a directory"),
+    (
+        ["envelope", "{in}/envelope_module.toml"],
+        "envelope_module.toml: grid.controller: controller 'no_such_module:f': no module named",
+    ),
+    (
+        ["envelope", "{in}/envelope_name.toml"],
+        "grid.controller: controller 'ankle_cop_feedback': must read MODULE:CALLABLE",
+    ),
+    (
+        ["envelope", "{in}/envelope_number.toml"],
+        'grid.controller = 1: must be "none" or MODULE:CALLABLE',
+    ),
+    (
+        ["envelope", "{in}/envelope_clash.toml"],
+        "grid.controller: controllers bench.controllers:load_controller, "
+        "bench.sim.closed_loop:load_controller: their callables' names",
+    ),
     (["mjcf", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
     (["mjcf", "--slope", "-60"], "--slope: -60: must lie in (-60, 60) deg"),
     (["mjcf", "--actuators", "hydraulic"], "invalid choice: 'hydraulic'"),

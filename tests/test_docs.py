@@ -100,6 +100,7 @@ def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
         assert _toml_value(rows[key][-1]) == SEARCH_DEFAULTS[key], key
     config = envelope_from_dict({"grid": {"step_time": [1.0], "slope": [0]}}, base_dir=tmp_path)
     assert config.modes == ACTUATOR_MODES and rows["actuators"][-1] == "every mode the bench has"
+    assert config.controllers == () and _toml_value(rows["controller"][-1]) == []
     (example,) = re.findall(r"```toml\n(.*?)```", ENVELOPE_DOC.read_text(), re.S)
     assert len(envelope_from_dict(tomllib.loads(example), base_dir=tmp_path).cells) == 15
 

@@ -3,10 +3,10 @@
 The envelope's half; the resumable table run (lock, partial table, resume, worker
 deaths, signals, progress) is the sweep's, ``batch.py``. A run directory holds
 ``envelope.partial.csv`` while a run is going and ``envelope.csv`` when it is
-done (columns: ``envelope_cell.ENVELOPE``), then ``envelope.png`` and
-``boundaries.md`` (per gait family: the fastest flat step time and the steepest
-slopes at 1 s, inside the polygon and walked in MuJoCo); with ``record``,
-``recordings/<cell_id>.rrd``.
+done (columns: ``envelope_cell.envelope_format(config.controllers)``), then
+``envelope.png`` and ``boundaries.md`` (per gait family: the fastest flat step time
+and the steepest slopes at 1 s, inside the polygon and walked in MuJoCo); with
+``record``, ``recordings/<cell_id>.rrd``.
 
 Convergence (``run_convergence``): a seeded 10 % of the cells is searched again
 with 4 × the generations (no MuJoCo: the question is the GA's), into
@@ -28,7 +28,7 @@ import numpy as np
 
 from bench.experiments.batch import Batch, duration, run_batch
 from bench.experiments.envelope_cell import (
-    ENVELOPE,
+    envelope_format,
     error_row,
     is_failure,
     run_cell,
@@ -48,16 +48,16 @@ def _is_error(row: dict) -> bool:
     return is_failure(row.get("error"))
 
 
-def _batch(name: str, fn, source: str) -> Batch:
+def _batch(name: str, fn, config: EnvelopeConfig) -> Batch:
     return Batch(
         name=name,
-        fmt=ENVELOPE,
+        fmt=envelope_format(config.controllers),
         fn=fn,
         key=lambda cell: cell.cell_id,
         label=lambda cell: cell.label,
         error_row=error_row,
         is_error=_is_error,
-        source=source,
+        source=config.source,
         unit="cells",
         outcome=_outcome,
     )
@@ -149,7 +149,7 @@ def run_envelope(
     cells = [replace(c, threads=threads) for c in config.cells]
     record_dir = out_dir / RECORDINGS_DIR if record else None
     result = run_batch(
-        _batch("envelope", run_cell, config.source),
+        _batch("envelope", run_cell, config),
         cells,
         len(cells),
         out_dir,
@@ -286,7 +286,7 @@ def run_convergence(
     bigger = [replace(c, threads=threads) for c in bigger]
     start = time.perf_counter()
     result = run_batch(
-        _batch("convergence", run_cell_search, config.source),
+        _batch("convergence", run_cell_search, config),
         bigger,
         len(bigger),
         out_dir,
@@ -304,18 +304,19 @@ def run_convergence(
     return compare_budgets(table, result.table, base, bigger)
 
 
-def _by_id(path) -> dict[str, dict]:
+def _by_id(path, fmt) -> dict[str, dict]:
     """The rows of a table (``read_table``: numbers as floats) by their id as written
     (an id of decimal digits only would read as a number)."""
     from bench.experiments.sweep_table import read_table
 
-    ids = ENVELOPE.read_rows(path)
+    ids = fmt.read_rows(path)
     return dict(zip(ids, read_table(path), strict=True))
 
 
 def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergence:
     """The ``Convergence`` of the rows of ``base`` in ``table`` vs ``bigger`` in the other."""
-    small, large = _by_id(table), _by_id(bigger_table)
+    fmt = envelope_format(base[0].controllers if base else ())
+    small, large = _by_id(table, fmt), _by_id(bigger_table, fmt)
     flips = found_flips = 0
     change = change_all = work_change = 0.0
     rows = []

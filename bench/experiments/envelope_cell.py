@@ -23,10 +23,19 @@ distance of the simulated CoP from the planned ZMP. A min-work search that
 found nothing is not played (its verdicts are empty). With a recording folder,
 the max-margin gait's trial in the first mode is written to ``<cell_id>.rrd``.
 
+With controllers (the envelope file's ``controller`` key: ``MODULE:CALLABLE``
+names, ``bench.controllers``) each played gait is also walked, in every mode,
+closed loop by each of them (``TrialSpec.controller``: the same events and ZMP
+comparison), into the columns ``<gait>_<mode>_<tag>_verdict`` and ``…_zmp_rms_mm``
+(``tag``: the callable's name, ``controller_tag``); the recording of each is
+``<cell_id>_<tag>.rrd``, marked with the controller's name.
+
 ``run_cell`` runs in a worker and never raises: a failure is the cell's
 ``error`` (verdicts ``error``). The table's columns are ``ENVELOPE``'s; one
 verdict column pair per actuator mode of ``bench.sim.model.ACTUATOR_MODES``, so
-a mode the bench gains joins the table by itself.
+a mode the bench gains joins the table by itself; with controllers,
+``envelope_format(controllers)`` appends theirs after every other column, so
+each open-loop column keeps its place.
 """
 
 from __future__ import annotations
@@ -58,9 +67,25 @@ GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
 EXTENDED_COLUMNS = ("pelvis_offset_m", "step_length_m", "sway_share")
 
 
-def sim_columns(gait: str, mode: str) -> tuple[str, str]:
-    """(verdict, ZMP RMS) column names of ``gait`` played in ``mode``."""
-    return f"{gait}_{mode}_verdict", f"{gait}_{mode}_zmp_rms_mm"
+def sim_columns(gait: str, mode: str, tag: str = "") -> tuple[str, str]:
+    """(verdict, ZMP RMS) column names of ``gait`` played in ``mode``, open loop or with
+    the controller of ``tag`` (``controller_tag``)."""
+    policy = f"{mode}_{tag}" if tag else mode
+    return f"{gait}_{policy}_verdict", f"{gait}_{policy}_zmp_rms_mm"
+
+
+def controller_tag(name: str) -> str:
+    """The column tag of controller ``MODULE:CALLABLE``: its callable's name, dots as
+    underscores (``ankle_cop_feedback``)."""
+    return name.partition(":")[2].replace(".", "_")
+
+
+def controller_columns(controllers: tuple[str, ...]) -> tuple[str, ...]:
+    """The columns the controllers add to the table, in every mode of the bench."""
+    tags = [controller_tag(c) for c in controllers]
+    return tuple(
+        c for g in GAITS for m in ACTUATOR_MODES for t in tags for c in sim_columns(g, m, t)
+    )
 
 
 _V1_COLUMNS = (
@@ -110,6 +135,32 @@ ENVELOPE = TableFormat(
 )
 
 
+def envelope_format(controllers: tuple[str, ...] = ()) -> TableFormat:
+    """The table of an envelope whose gaits are also walked by ``controllers``: ``ENVELOPE``
+    and, after its columns, a verdict and ZMP RMS column pair per gait, mode and controller.
+
+    Raises:
+        ValueError: two controllers whose columns would share a name.
+    """
+    if not controllers:
+        return ENVELOPE
+    extra = controller_columns(controllers)
+    if len(set(extra) | set(COLUMNS)) != len(extra) + len(COLUMNS):
+        raise ValueError(
+            f"controllers {', '.join(controllers)}: their callables' names "
+            f"({', '.join(controller_tag(c) for c in controllers)}) must differ (they name the "
+            "table's columns)"
+        )
+    verdicts, rms = extra[0::2], extra[1::2]
+    return TableFormat(
+        "envelope",
+        (*COLUMNS, *extra),
+        DECIMALS | dict.fromkeys(rms, 4),
+        ENVELOPE.verdicts | dict.fromkeys(verdicts, VERDICTS),
+        siblings=((COLUMNS, "its columns are those of an envelope without a controller key"),),
+    )
+
+
 @dataclass(frozen=True)
 class SearchSettings:
     """The GA of every cell: population, generations, seed, families, required margin [m]."""
@@ -131,6 +182,8 @@ class EnvelopeCell:
         robot: The spec path as written, or "default". family: Gait family.
         steps: Steps per walk. search: The GA settings. modes: Actuator modes played.
         spec: The robot. spec_json: ``spec_text(spec)``, its part of the id.
+        controllers: ``MODULE:CALLABLE`` of the controllers each played gait is also
+            walked with (part of the id only when there are some: open-loop ids stay).
         threads: numba threads of the cell's GA (not part of the id).
     """
 
@@ -144,6 +197,7 @@ class EnvelopeCell:
     modes: tuple[str, ...]
     spec: RobotSpec = field(repr=False, compare=False)
     spec_json: str = field(default="", repr=False, compare=False)
+    controllers: tuple[str, ...] = ()
     threads: int = field(default=1, compare=False)
 
     @property
@@ -161,6 +215,8 @@ class EnvelopeCell:
             "timestep": TIMESTEP,
             "spec": self.spec_json or spec_text(self.spec),
         }
+        if self.controllers:  # only then: the open-loop ids stay what they were
+            key["controllers"] = list(self.controllers)
         return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
     @property
@@ -246,7 +302,8 @@ def is_failure(error) -> bool:
 
 def error_row(cell: EnvelopeCell, cause: str) -> dict:
     """The row of a cell that raised or killed its worker."""
-    verdicts = {sim_columns(g, m)[0]: "error" for g in GAITS for m in cell.modes}
+    tags = ["", *(controller_tag(c) for c in cell.controllers)]
+    verdicts = {sim_columns(g, m, t)[0]: "error" for g in GAITS for m in cell.modes for t in tags}
     return cell.inputs() | verdicts | {"error": cause}
 
 
@@ -409,20 +466,30 @@ def _gait_columns(cell, gait: str, x, work: float, margin: float, found: bool) -
 
 
 def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
-    """Play a 1 ms ``plan`` in every mode of the cell: its verdict and ZMP RMS columns."""
+    """Play a 1 ms ``plan`` in every mode of the cell, open loop and with each of its
+    controllers: their verdict and ZMP RMS columns."""
     from bench.sim.trial import TrialSpec, run_trial
 
     out = {}
     for i, mode in enumerate(cell.modes):
-        trial = TrialSpec(plan.params, friction=cell.friction, actuators=mode, timestep=TIMESTEP)
-        result = run_trial(cell.spec, trial, plan=plan)
-        verdict, rms = sim_columns(gait, mode)
-        out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}
-        if record_dir is not None and i == 0:
-            from bench.experiments.sweep import _record
+        for controller in (None, *cell.controllers):
+            trial = TrialSpec(
+                plan.params,
+                friction=cell.friction,
+                actuators=mode,
+                timestep=TIMESTEP,
+                controller=controller,
+            )
+            result = run_trial(cell.spec, trial, plan=plan)
+            tag = controller_tag(controller) if controller else ""
+            verdict, rms = sim_columns(gait, mode, tag)
+            out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}
+            if record_dir is not None and i == 0:
+                from bench.experiments.sweep import _record
 
-            try:
-                _record(Path(record_dir), cell.cell_id, plan, result)
-            except Exception as err:  # the cell stands; a re-run with --record retries
-                out["error"] = f"recording failed: {one_line(err)}"
+                name = f"{cell.cell_id}_{tag}" if tag else cell.cell_id
+                try:
+                    _record(Path(record_dir), name, plan, result)
+                except Exception as err:  # the cell stands; a re-run with --record retries
+                    out["error"] = f"recording failed: {one_line(err)}"
     return out

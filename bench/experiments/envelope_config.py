@@ -11,6 +11,7 @@ Format (degrees and millimetres at this edge, like the CLI)::
     friction = [1.0]                 # Coulomb mu, in (0, 10] ([1.0])
     robot = ["default"]              # spec files, relative to this file (the paper's biped)
     actuators = ["stiff", "servo"]   # modes each found gait is played in (every mode the bench has)
+    controller = ["bench.controllers.ankle_cop:ankle_cop_feedback"]  # also walked closed loop ([])
 
     [search]             # the GA of every cell (the paper's operators, seeded)
     population = 40      # in [2, 1000] (40)
@@ -18,6 +19,12 @@ Format (degrees and millimetres at this edge, like the CLI)::
     seed = 0             # in [0, 2^32 - 1] (0)
     family = ["paper"]   # gait families searched, one row each ("paper", "extended")
     required_margin = 5  # [mm] least ZMP margin of the least-work gait, in [0, 50] (5)
+
+``controller`` names closed-loop controllers (``MODULE:CALLABLE``, as in a sweep
+file; ``"none"``, open loop, is always played): each played gait is also walked,
+in every mode, by each of them, into columns of their own (``envelope_cell``).
+A controller that does not import, or two whose callables share a name (they
+name the columns), is refused before any cell runs.
 
 Every key is checked: an unknown key, a value of the wrong type or out of its
 range is refused in one line naming the key, the value and the range (the
@@ -32,8 +39,13 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
-from bench.experiments.sweep_config import SweepError, _body, _known, _number
+from bench.experiments.envelope_cell import (
+    FAMILIES,
+    EnvelopeCell,
+    SearchSettings,
+    envelope_format,
+)
+from bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
 from bench.flags import GENERATIONS, POPULATION, SEED
 from bench.sim.model import ACTUATOR_MODES
 from planner import ranges
@@ -44,7 +56,7 @@ from planner.trajectory import GaitParams
 ENVELOPES_DIR = Path(__file__).parent / "envelopes"
 DEFAULT_ENVELOPE = ENVELOPES_DIR / "paper.toml"
 TOP_KEYS = ("description", "steps", "grid", "search")
-GRID_KEYS = ("step_time", "slope", "friction", "robot", "actuators")
+GRID_KEYS = ("step_time", "slope", "friction", "robot", "actuators", "controller")
 SEARCH_KEYS = ("population", "generations", "seed", "family", "required_margin")
 SEARCH_DEFAULTS = {
     "population": 40,
@@ -71,6 +83,8 @@ class EnvelopeConfig:
         step_times, slopes_deg: The grid's axes as written [s], [deg].
         search: The GA settings of every cell.
         modes: Actuator modes each found gait is played in.
+        controllers: ``MODULE:CALLABLE`` of the controllers each played gait is also
+            walked with (besides open loop).
     """
 
     source: str
@@ -80,6 +94,7 @@ class EnvelopeConfig:
     search: SearchSettings
     modes: tuple[str, ...]
     description: str = ""
+    controllers: tuple[str, ...] = ()
 
 
 def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
@@ -135,6 +150,15 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
             raise EnvelopeError(
                 f"{where}.actuators = {mode!r}: must be one of {', '.join(ACTUATOR_MODES)}"
             )
+    controllers = tuple(
+        c
+        for c in _unique(_controller(v, where) for v in _list(grid, "controller", [], source))
+        if c is not None  # "none": open loop, played anyway
+    )
+    try:
+        envelope_format(controllers)
+    except ValueError as err:
+        raise EnvelopeError(f"{where}.controller: {err}") from None
     robots: dict = {}
     bodies = [
         _body(r, (), robots, base_dir, where) for r in _list(grid, "robot", ["default"], source)
@@ -160,12 +184,15 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
             modes=modes,
             spec=body.spec,
             spec_json=body.spec_json,
+            controllers=controllers,
         )
         for t, s, mu, body, family in itertools.product(
             step_times, slopes, frictions, bodies, settings.families
         )
     )
-    return EnvelopeConfig(source, cells, step_times, slopes, settings, modes, description)
+    return EnvelopeConfig(
+        source, cells, step_times, slopes, settings, modes, description, controllers
+    )
 
 
 def _search(table: dict, source: str) -> SearchSettings:

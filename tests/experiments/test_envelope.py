@@ -231,4 +231,36 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
 
     path = tmp_path / "e.csv"
     path.write_bytes(ENVELOPE.header + ENVELOPE.format_row({"cell_id": "123456789012"}))
-    assert list(_by_id(path)) == ["123456789012"]  # not the number 123456789012.0
+    assert list(_by_id(path, ENVELOPE)) == ["123456789012"]  # not the number 123456789012.0
+
+
+def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
+    """The plan as a controller (``bench.sim.env:open_loop``) walks as open loop does; the
+    ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""
+    from bench.experiments.envelope_cell import envelope_format, sim_columns
+
+    plan_policy = "bench.sim.env:open_loop"
+    ankle = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    config = tmp_path / "c.toml"
+    config.write_text(
+        'steps = 2\n[grid]\nstep_time = [1.0]\nslope = [0]\nactuators = ["stiff"]\n'
+        f'controller = ["{plan_policy}", "{ankle}"]\n'
+        "[search]\npopulation = 10\ngenerations = 4\n"
+    )
+    out = tmp_path / "out"
+    assert main(["envelope", str(config), "--out", str(out), "--workers", "1", "--record"]) == 0
+    data = (out / "envelope.csv").read_bytes()
+    assert data.startswith(envelope_format((plan_policy, ankle)).header)
+    (row,) = read_table(out / "envelope.csv")
+    assert row["error"] == "" and row["minwork_found"] == "True"
+    for gait in ("maxmargin", "minwork"):
+        verdict, rms = sim_columns(gait, "stiff")
+        same, same_rms = sim_columns(gait, "stiff", "open_loop")
+        ankle_verdict, ankle_rms = sim_columns(gait, "stiff", "ankle_cop_feedback")
+        assert row[verdict] == "stable" == row[same] == row[ankle_verdict]
+        assert abs(row[same_rms] - row[rms]) < 1e-3  # [mm]: the same trial, stepped
+        assert abs(row[ankle_rms] - row[rms]) > 1e-3  # the controller moved the CoP
+        assert row[sim_columns(gait, "servo", "ankle_cop_feedback")[0]] == ""  # not asked
+    cell = row["cell_id"]
+    names = sorted(p.name for p in (out / "recordings").iterdir())
+    assert names == [f"{cell}.rrd", f"{cell}_ankle_cop_feedback.rrd", f"{cell}_open_loop.rrd"]

@@ -55,6 +55,34 @@ def _with(section: str, **values) -> dict:
         (_with("search", family=[]), "search.family = []: must be a family name or"),
         (_with("search", required_margin=-1), "search.required_margin = -1 mm: must lie in [0,"),
         (_with("search", required_margin=60), "search.required_margin = 60 mm: must lie in"),
+        (
+            _with("grid", controller=["ankle_cop_feedback"]),
+            "grid.controller: controller 'ankle_cop_feedback': must read MODULE:CALLABLE",
+        ),
+        (_with("grid", controller=[3]), 'grid.controller = 3: must be "none" or MODULE:CALLABLE'),
+        (
+            _with("grid", controller=["no_such_module:f"]),
+            "grid.controller: controller 'no_such_module:f': no module named 'no_such_module'",
+        ),
+        (
+            _with("grid", controller=["bench.controllers.ankle_cop:nothing"]),
+            "module 'bench.controllers.ankle_cop' has no 'nothing'",
+        ),
+        (
+            _with("grid", controller="bench.controllers.ankle_cop:ankle_cop_feedback"),
+            "grid.controller = 'bench.controllers.ankle_cop:ankle_cop_feedback': must be a "
+            "non-empty list",
+        ),
+        (
+            _with(
+                "grid",
+                controller=[
+                    "bench.controllers:load_controller",
+                    "bench.sim.closed_loop:load_controller",
+                ],
+            ),
+            "their callables' names (load_controller, load_controller) must differ",
+        ),
         ({**GOOD, "steps": 0}, "steps = 0: must be an integer in [1, 1000]"),
         ({**GOOD, "description": 3}, "description = 3: must be a string"),
     ],
@@ -96,6 +124,17 @@ def test_both_families_give_one_cell_each(tmp_path):
     x = np.array([0.2, 0.05, 0.1, 0.01, 0.08, 0.4])
     gait = extended[0].gait(x)
     assert (gait.pelvis_offset, gait.step_length, gait.lean_share) == (0.01, 0.08, 0.4)
+
+
+def test_controllers_are_walked_by_every_cell_and_enter_its_id_only_when_set(tmp_path):
+    ankle = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    plain = envelope_from_dict(GOOD, base_dir=tmp_path)
+    none = envelope_from_dict(_with("grid", controller=["none"]), base_dir=tmp_path)
+    both = envelope_from_dict(_with("grid", controller=["none", ankle, ankle]), base_dir=tmp_path)
+    assert plain.controllers == none.controllers == () and both.controllers == (ankle,)
+    assert none.cells[0].cell_id == plain.cells[0].cell_id  # "none" is open loop, played anyway
+    assert both.cells[0].controllers == (ankle,)
+    assert both.cells[0].cell_id != plain.cells[0].cell_id  # its row has more columns
 
 
 def test_the_default_envelope_covers_the_papers_plane():
