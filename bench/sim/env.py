@@ -106,10 +106,11 @@ class TrialEnv(dm_env.Environment):
         )
         self.data = mujoco.MjData(self.model)
         self._initial = initial_state(self.model, self.plan)
-        self._t, self._ctrl_ref = control_sequence(self.plan, dt, settle, hold)
+        servo = servo_settings(spec, trial.actuators)  # a "_ff" mode's command carries τ_ff / kp
+        self._t, self._ctrl_ref = control_sequence(self.plan, dt, settle, hold, servo)
         self._settle_rows = int(np.count_nonzero(self._t < 0))
         self._R = rotation_slope_to_world(self.plan.params.slope)
-        self._force_limit = servo_settings(spec, trial.actuators).force_limit
+        self._force_limit = servo.force_limit
         self._observe = Observer(self.model, self.data, self.plan, self._t, self._ctrl_ref)
         self._touch = sensor_indices(self.model, *(f"{b}_touch" for b in NON_FOOT_BODIES))
         self._pelvis = sensor_indices(self.model, "pelvis_pos")

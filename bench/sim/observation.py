@@ -11,7 +11,8 @@ trial like the open-loop command.
 * ``q``, ``qd`` (8,): joint angles [rad] and rates [rad/s].
 * ``q_ref``, ``qd_ref``, ``tau_ff`` (8,): the plan's joint angles, rates and
   Newton-Euler torques [N m] at ``time``; ``ctrl_ref`` (nu,): the open-loop command
-  the rollout sends for the coming period (the plan's references; ``open_loop``).
+  the rollout sends for the coming period (the plan's references, shifted by
+  τ_ff / kp in a feedforward mode; ``open_loop``).
 * ``zmp_ref`` (2,) [m], ``com_ref`` (3,) [m]: the plan's multibody ZMP and CoM.
 * ``foot_force`` (2, 3) [N]: ground force on each foot (left, right).
 * ``foot_cop`` (2, 2) [m]: CoP under each foot on the plane; a foot with no

@@ -55,12 +55,19 @@ def _play_open_loop(env: TrialEnv):
     return step, periods
 
 
-@pytest.mark.parametrize("step_time, slope", [(1.0, 0.0), (0.4, 0.0), (1.0, 25.0)])
-def test_the_open_loop_policy_reproduces_the_rollout_to_the_last_bit(spec, step_time, slope):
-    """Stable (1 s flat), falling (0.4 s) and tipping (25°) trials, every sensor series."""
-    trial = TrialSpec(GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope), steps=2))
+@pytest.mark.parametrize(
+    "step_time, slope, actuators",
+    [(1.0, 0.0, "stiff"), (0.4, 0.0, "stiff"), (1.0, 25.0, "stiff"), (1.0, 0.0, "servo_ff")],
+)
+def test_the_open_loop_policy_reproduces_the_rollout_to_the_last_bit(
+    spec, step_time, slope, actuators
+):
+    """Stable (1 s flat), falling (0.4 s) and tipping (25°) trials, every sensor series;
+    and a feedforward mode, whose plan command carries the torque feedforward."""
+    gait = GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope), steps=2)
+    trial = TrialSpec(gait, actuators=actuators)
     plan = plan_walk(spec, trial.gait)
-    expected = play(plan)
+    expected = play(plan, actuators=actuators)
     env = TrialEnv(spec, trial, plan=plan, end_at_fall=False)
     step, periods = _play_open_loop(env)
     got = env.recording()
