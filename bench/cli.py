@@ -279,8 +279,12 @@ def build_parser() -> argparse.ArgumentParser:
         "open loop vs the shipped controllers over a sweep: which trials walk",
         "Play every trial of a sweep file open loop and with each shipped closed-loop "
         "controller (bench/controllers/), and write the markdown table of how many walk "
-        "(simulated verdict stable), which each controller gains and loses, and every verdict.",
-        "slopewalk controllers --workers 2 --out results/controllers.md",
+        "(simulated verdict stable), which each controller gains and loses, and every verdict. "
+        "With --envelope, a second table does the same over a stability envelope's gaits: "
+        "those of a finished envelope.csv (re-planned from its parameters, no GA run again) "
+        "or of an envelope TOML (every cell's GA run again).",
+        "slopewalk controllers --workers 2 --envelope results/envelope/envelope.csv "
+        "--out results/controllers.md",
         "slopewalk controllers my_sweep.toml --out controllers.md",
     )
     p.add_argument(
@@ -301,6 +305,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=1,
         metavar="N",
         help=f"local worker processes, in {WORKERS}",
+    )
+    p.add_argument(
+        "--envelope",
+        metavar="TABLE_OR_TOML",
+        help="also compare over an envelope's gaits: its envelope.csv, or an envelope TOML "
+        "(docs/envelope-format.md)",
+    )
+    p.add_argument(
+        "--min-step-time",
+        type=number(ranges.STEP_TIME),
+        metavar="S",
+        help="with --envelope: only the cells of step time >= S [s] (default: every cell)",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="output markdown table")
     p.set_defaults(run=commands.controllers)

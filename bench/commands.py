@@ -322,7 +322,7 @@ def _write_claims(results, sweep_table, envelope_table) -> None:
 
 
 def controllers(args) -> None:
-    from bench.controllers import SHIPPED, load_controller
+    from bench.controllers import SHIPPED, ControllerError, load_controller
     from bench.experiments.controllers import compare_controllers, report
     from bench.experiments.sweep_config import DEFAULT_SWEEP, load_sweep
 
@@ -330,19 +330,49 @@ def controllers(args) -> None:
     names = tuple(args.controller or SHIPPED)
     for name in names:
         load_controller(name)  # a bad name is refused before any trial runs
+    if args.min_step_time is not None and args.envelope is None:
+        raise ControllerError("--min-step-time: only with --envelope")
+    envelope = _envelope_gaits(args) if args.envelope else None  # checked before any trial
     config = load_sweep(args.config)
     table = compare_controllers(config, names, workers=args.workers)
     source = args.config or DEFAULT_SWEEP.relative_to(DEFAULT_SWEEP.parents[3]).as_posix()
     command = " ".join(
         ["slopewalk controllers", *([args.config] if args.config else [])]
         + [f"--controller {name}" for name in args.controller or ()]
+        + ([f"--envelope {args.envelope}"] if args.envelope else [])
+        + ([f"--min-step-time {args.min_step_time:g}"] if args.min_step_time else [])
         + [f"--out {args.out}"]
     )
     text = report(table, source=source, command=command)
+    if envelope is not None:
+        from bench.experiments.envelope_controllers import compare_envelope, envelope_report
+
+        jobs = envelope()
+        verdicts = compare_envelope(jobs, names, workers=args.workers)
+        subset = f" of step time >= {args.min_step_time:g} s" if args.min_step_time else ""
+        text += "\n" + envelope_report(jobs, verdicts, names, source=args.envelope, subset=subset)
     with atomic_paths(args.out) as (tmp,):
         tmp.write_text(text)
     print(text, end="")
     print(f"wrote {args.out}")
+
+
+def _envelope_gaits(args):
+    """The ``--envelope`` file checked now; a callable that returns its gait jobs."""
+    from pathlib import Path
+
+    from bench.experiments import envelope_controllers as ec
+
+    path, low = Path(args.envelope), args.min_step_time or 0.0
+    if path.suffix == ".toml":
+        from bench.experiments.envelope_config import load_envelope
+
+        config = load_envelope(path)
+        return lambda: ec.config_jobs(config, workers=args.workers, min_step_time=low)
+    jobs = ec.table_jobs(path, min_step_time=low)
+    if not jobs:
+        raise ec.EnvelopeTableError(f"{path}: no played gait at step time >= {low:g} s")
+    return lambda: jobs
 
 
 def envelope(args) -> None:

@@ -168,6 +168,24 @@ CASES = [
         "grid.controller: controllers bench.controllers:load_controller, "
         "bench.sim.closed_loop:load_controller: their callables' names",
     ),
+    (
+        ["controllers", "--envelope", "{in}/a_file"],
+        "a_file: not an envelope table (no column cell_id)",
+    ),
+    (
+        ["controllers", "--envelope", "{in}/missing.csv"],
+        "missing.csv: cannot read (No such file or directory)",
+    ),
+    (["controllers", "--envelope", "{in}"], "in: is a directory, not an envelope table"),
+    (
+        ["controllers", "--envelope", "{in}/envelope_name.toml"],
+        "grid.controller: controller 'ankle_cop_feedback': must read MODULE:CALLABLE",
+    ),
+    (["controllers", "--min-step-time", "0.5"], "--min-step-time: only with --envelope"),
+    (
+        ["controllers", "--envelope", "{in}/a_file", "--min-step-time", "0"],
+        "--min-step-time: 0: must lie in (0, 60] s",
+    ),
     (["mjcf", "--friction", "inf"], "--friction: inf: must lie in (0, 10]"),
     (["mjcf", "--slope", "-60"], "--slope: -60: must lie in (-60, 60) deg"),
     (["mjcf", "--actuators", "hydraulic"], "invalid choice: 'hydraulic'"),
