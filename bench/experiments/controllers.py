@@ -2,7 +2,7 @@
 
 ``compare_controllers`` plays every trial of a sweep (default: the paper's) open
 loop (one ``mujoco.rollout``) and with each controller (``bench.sim.env``), on
-local worker processes, and ``report`` writes the markdown table of
+local spawned worker processes (``map_local``), and ``report`` writes the markdown table of
 ``results/controllers.md``: per controller, how many trials walk (simulated
 verdict ``stable``), which ones it gains and loses against open loop, and the
 verdict of every trial.
@@ -11,6 +11,7 @@ verdict of every trial.
 from __future__ import annotations
 
 import dataclasses
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 
 from bench.controllers import SHIPPED
@@ -39,12 +40,21 @@ def compare_controllers(config, controllers=SHIPPED, *, workers: int = 1) -> dic
     trials = list(config.trials)
     names = [None, *controllers]
     jobs = [(trial, name) for name in names for trial in trials]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        rows = list(pool.map(play, jobs, chunksize=4))
+    rows = map_local(play, jobs, workers)
     out = {"trials": [t.label for t in trials]}
     for k, name in enumerate(names):
         out[name or OPEN_LOOP] = rows[k * len(trials) : (k + 1) * len(trials)]
     return out
+
+
+def map_local(fn, items: list, workers: int) -> list:
+    """``fn`` over ``items``: here with one worker, else on spawned processes (a fork of a
+    process whose numba kernel has started its OpenMP threads is refused)."""
+    if workers <= 1:
+        return [fn(item) for item in items]
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        return list(pool.map(fn, items, chunksize=4))
 
 
 def report(table: dict, *, source: str, command: str) -> str:

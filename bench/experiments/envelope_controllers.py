@@ -22,13 +22,12 @@ and the report counts how often its verdict is the table's.
 from __future__ import annotations
 
 import math
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from bench.experiments.controllers import map_local
 from bench.experiments.envelope_cell import GAITS, controller_tag, sim_columns
 from bench.sim.model import ACTUATOR_MODES
 from planner.errors import SlopewalkError
@@ -167,7 +166,7 @@ def config_jobs(config, *, workers: int = 1, min_step_time: float = 0.0) -> list
     from bench.experiments.envelope_cell import is_failure, run_cell_search
 
     cells = [c for c in config.cells if c.step_time >= min_step_time]
-    rows = _map(run_cell_search, cells, workers)
+    rows = map_local(run_cell_search, cells, workers)
     jobs = []
     for cell, row in zip(cells, rows, strict=True):
         if is_failure(row.get("error")):
@@ -206,17 +205,7 @@ def play_gait(job_and_controllers) -> dict:
 
 def compare_envelope(jobs: list[GaitJob], controllers: tuple[str, ...], *, workers: int = 1):
     """The verdicts of every job, open loop and with each controller (``play_gait``)."""
-    return _map(play_gait, [(j, tuple(controllers)) for j in jobs], workers)
-
-
-def _map(fn, items: list, workers: int) -> list:
-    """``fn`` over ``items``: here with one worker, else on spawned processes (a fork of a
-    process whose numba kernel has started its OpenMP threads is refused)."""
-    if workers <= 1:
-        return [fn(item) for item in items]
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        return list(pool.map(fn, items, chunksize=2))
+    return map_local(play_gait, [(j, tuple(controllers)) for j in jobs], workers)
 
 
 def envelope_report(

@@ -76,3 +76,18 @@ def test_a_table_without_the_envelope_columns_is_refused(tmp_path):
     path.write_text("trial_id,step_time\n")
     with pytest.raises(EnvelopeTableError, match="not an envelope table .no column cell_id"):
         table_jobs(path)
+
+
+def test_the_command_appends_the_envelope_section_and_names_itself(table, tmp_path, capsys):
+    from bench.cli import main
+
+    sweep = tmp_path / "s.toml"
+    sweep.write_text("steps = 1\n[[trial]]\nstep_time = 1.0\n")
+    out = tmp_path / "c.md"
+    argv = ["controllers", str(sweep), "--controller", PLAN_POLICY, "--envelope", str(table)]
+    assert main([*argv, "--min-step-time", "0.75", "--out", str(out)]) == 0
+    text = out.read_text()
+    command = " ".join(["slopewalk", *argv, "--min-step-time 0.75", f"--out {out}"])
+    assert f"Regenerate with `{command}`" in text
+    assert f"The gaits of `{table}` (1 cells of step time >= 0.75 s)" in text
+    assert text.index("# Open loop vs closed-loop controllers") < text.index("## Stability")
