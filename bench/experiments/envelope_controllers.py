@@ -230,7 +230,7 @@ def envelope_report(
         "|---" * (4 + len(tags)) + "|",
     ]
     changes = []
-    wins = rows = 0
+    tally = {tag: [0, 0, 0] for tag in tags}  # rows where it walks more, as many, fewer cells
     agree = compared = 0
     for gait in GAITS:
         for mode in ACTUATOR_MODES:
@@ -242,7 +242,6 @@ def envelope_report(
                 continue
             base = [v[mode, None] == "stable" for _, v in picked]
             cells_text = []
-            better = True
             for controller, tag in zip(controllers, tags, strict=True):
                 walks = [v[mode, controller] == "stable" for _, v in picked]
                 gained = [
@@ -250,15 +249,13 @@ def envelope_report(
                 ]
                 lost = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w < b]
                 cells_text.append(f"{sum(walks)} (+{len(gained)} −{len(lost)})")
-                better &= sum(walks) > sum(base)
+                tally[tag][(sum(walks) <= sum(base)) + (sum(walks) < sum(base))] += 1
                 if gained or lost:
                     changes.append(
                         f"- {tag}, {GAIT_NAMES[gait]} gait, {mode}: "
                         + (f"gains {'; '.join(gained)}" if gained else "gains none")
                         + (f"; loses {'; '.join(lost)}" if lost else "")
                     )
-            rows += 1
-            wins += better
             lines.append(
                 f"| {GAIT_NAMES[gait]} | {mode} | {len(picked)} | {sum(base)} | "
                 + " | ".join(cells_text)
@@ -268,16 +265,20 @@ def envelope_report(
                 if j.table_verdicts.get(mode):
                     compared += 1
                     agree += j.table_verdicts[mode] == v[mode, None]
-    lines += [
-        "",
-        f"Every controller walks strictly more cells than open loop in {wins} of these "
-        f"{rows} rows.",
-    ]
+    lines.append("")
+    for tag, (more, same, fewer) in tally.items():
+        lines.append(
+            f"- {tag} walks strictly more cells than open loop in {more} of these "
+            f"{more + same + fewer} rows, as many in {same}, fewer in {fewer}."
+        )
     if compared:
         lines += [
             "",
-            f"The open-loop walks played again from the table's rounded parameters have the "
-            f"table's verdict in {agree} of {compared} (gait, mode) walks.",
+            f"The open-loop walks played again from the table's parameters (written to 7 "
+            f"digits) have the table's verdict in {agree} of {compared} (gait, mode) walks; "
+            "the others differ by that rounding or by a change of the bench since the table "
+            "was written. The counts above compare like with like: open loop and controllers "
+            "from the same re-planned gait.",
         ]
     lines += ["", "Cells gained (walk with the controller, not open loop) and lost:", ""]
     lines += changes or ["- none"]
