@@ -274,8 +274,8 @@ def envelope_report(
     if compared:
         lines += [
             "",
-            f"The open-loop walks played again from the table's parameters (written to 7 "
-            f"digits) have the table's verdict in {agree} of {compared} (gait, mode) walks; "
+            f"The open-loop walks played again from the table's parameters (as rounded in the "
+            f"table) have the table's verdict in {agree} of {compared} (gait, mode) walks; "
             "the others differ by that rounding or by a change of the bench since the table "
             "was written. The counts above compare like with like: open loop and controllers "
             "from the same re-planned gait.",
