@@ -104,10 +104,19 @@ def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
         EnvelopeError: unreadable file, unknown key, value out of range or missing
             robot file, in one line naming the key.
     """
+    given = path
     path = Path(path) if path is not None else DEFAULT_ENVELOPE
     where = f"envelope file {str(path)!r}"
     data = load_toml(path, where=where, kind="an envelope TOML", error=EnvelopeError)
-    return envelope_from_dict(data, base_dir=path.parent, source=str(path))
+    # the source as the reports quote it: as given, or the default's path in the package
+    # (never this machine's absolute path, which would differ in every checkout)
+    source = str(given) if given is not None else _in_package(DEFAULT_ENVELOPE)
+    return envelope_from_dict(data, base_dir=path.parent, source=source)
+
+
+def _in_package(path: Path) -> str:
+    """``path`` relative to the folder that holds the ``bench`` package, POSIX style."""
+    return path.relative_to(Path(__file__).resolve().parents[2]).as_posix()
 
 
 def envelope_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> EnvelopeConfig:
