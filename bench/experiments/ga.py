@@ -35,6 +35,7 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 
@@ -232,12 +233,17 @@ def _drive(algorithm, pymoo_problem, settings: GaSettings, progress: bool, label
     batches = []
     log = pymoo_problem.log.F
     start = time.perf_counter()
-    with tqdm(total=settings.generations, desc=label, unit="gen", disable=not progress) as bar:
+    # no bar at all unless asked: even a disabled tqdm makes a multiprocessing lock, which a
+    # worker killed at the end of a run leaves to the resource tracker's "leaked semaphore"
+    # warning
+    bar = tqdm(total=settings.generations, desc=label, unit="gen") if progress else None
+    with bar or contextlib.nullcontext():
         while algorithm.has_next():
             before = len(log)
             algorithm.next()
             batches.append(sum(len(x) for x in log[before:]))
-            bar.update(1)
+            if bar is not None:
+                bar.update(1)
     if hasattr(algorithm, "finish"):
         algorithm.finish()
     return time.perf_counter() - start, batches

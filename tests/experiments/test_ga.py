@@ -380,3 +380,35 @@ def test_problem_definition_needs_neither_pymoo_nor_mujoco():
         "import planner.gait_search"
     )
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_a_quiet_ga_makes_no_multiprocessing_lock(tmp_path):
+    """A worker's GA without a progress bar leaves nothing to the resource tracker.
+
+    A disabled tqdm bar still made a multiprocessing lock (a named semaphore); the
+    envelope's workers, killed at the end of a run, then left "leaked semaphore"
+    warnings on every `slopewalk envelope`. Run in a fresh interpreter (tqdm keeps its
+    lock per process once made) whose start method is spawn, as in a worker (under
+    fork a lock's name is unlinked at once and never registered).
+    """
+    script = tmp_path / "quiet_ga.py"
+    script.write_text(
+        "import multiprocessing\n"
+        "import multiprocessing.resource_tracker as rt\n"
+        "multiprocessing.set_start_method('spawn')  # as in a spawned worker\n"
+        "made = []\n"
+        "rt.register = lambda name, kind: made.append(kind)\n"
+        "import numpy as np\n"
+        "from bench.experiments.ga import GaSettings, run_ga\n"
+        "from planner.gait_search import GaitProblem, ga_params\n"
+        "from planner.spec import load_spec\n"
+        "spec = load_spec()\n"
+        "problem = GaitProblem(spec, ga_params(spec, 1.0, 0.0))\n"
+        "run_ga(problem, GaSettings(population=8, generations=2, seed=0))\n"
+        "print(made)\n"
+    )
+    result = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"
