@@ -363,8 +363,9 @@ def _outward(side, com, inertia, gravity, n, w):
         w[_OMEGA + j] = w[_OMEGA + B + j] = w[_OMEGA + 2 * B + j] = 0.0
         w[_DOMEGA + j] = w[_DOMEGA + B + j] = w[_DOMEGA + 2 * B + j] = 0.0
         w[_ACC + j], w[_ACC + B + j], w[_ACC + 2 * B + j] = -gravity[0], -gravity[1], -gravity[2]
-    # one call per link with its index a literal: compiled per link, with every offset a
-    # constant (with i a run-time value the loops of ``_link`` did not vectorise)
+    # one call per link with its index a literal, inlined (numba IR) so that every offset
+    # is a constant: with i a run-time value the loops of ``_link`` did not vectorise
+    # (10 vs 1.3 ns per sample and link)
     _link(0, side, com, inertia, n, w)
     _advance(1, n, w)
     _link(1, side, com, inertia, n, w)
