@@ -15,7 +15,7 @@ import sys
 
 import numpy as np
 
-from bench.files import atomic_paths, check_output, check_output_dir
+from bench.files import atomic_paths, check_output, check_output_dir, in_package
 from planner.errors import SlopewalkError
 
 
@@ -335,7 +335,7 @@ def controllers(args) -> None:
     envelope = _envelope_gaits(args) if args.envelope else None  # checked before any trial
     config = load_sweep(args.config)
     table = compare_controllers(config, names, workers=args.workers)
-    source = args.config or DEFAULT_SWEEP.relative_to(DEFAULT_SWEEP.parents[3]).as_posix()
+    source = args.config or in_package(DEFAULT_SWEEP)
     command = " ".join(
         ["slopewalk controllers", *([args.config] if args.config else [])]
         + [f"--controller {name}" for name in args.controller or ()]

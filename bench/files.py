@@ -183,3 +183,12 @@ def _write_error(err: OSError, targets: list[Path], staged: list[Path | None]) -
     if len(targets) == 1:
         return f"cannot write {str(targets[0])!r}: {err.strerror or err}"
     return f"cannot write {', '.join(repr(str(t)) for t in targets)}: {err.strerror or err}"
+
+
+def in_package(path: str | Path) -> str:
+    """A file shipped with slopewalk, as reports quote it: relative to the checkout's root.
+
+    POSIX style (``bench/experiments/sweeps/paper.toml``), never this machine's
+    absolute path, which differs in every checkout.
+    """
+    return Path(path).resolve().relative_to(Path(__file__).resolve().parents[1]).as_posix()

@@ -46,6 +46,7 @@ from bench.experiments.envelope_cell import (
     envelope_format,
 )
 from bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
+from bench.files import in_package
 from bench.flags import GENERATIONS, POPULATION, SEED
 from bench.sim.model import ACTUATOR_MODES
 from planner import ranges
@@ -109,14 +110,8 @@ def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
     where = f"envelope file {str(path)!r}"
     data = load_toml(path, where=where, kind="an envelope TOML", error=EnvelopeError)
     # the source as the reports quote it: as given, or the default's path in the package
-    # (never this machine's absolute path, which would differ in every checkout)
-    source = str(given) if given is not None else _in_package(DEFAULT_ENVELOPE)
+    source = str(given) if given is not None else in_package(DEFAULT_ENVELOPE)
     return envelope_from_dict(data, base_dir=path.parent, source=source)
-
-
-def _in_package(path: Path) -> str:
-    """``path`` relative to the folder that holds the ``bench`` package, POSIX style."""
-    return path.relative_to(Path(__file__).resolve().parents[2]).as_posix()
 
 
 def envelope_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> EnvelopeConfig:
