@@ -25,9 +25,9 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
 * selection: binary tournament on (constraint violation, objective); survival:
   pymoo's (μ + λ) truncation of parents and children, which is stronger elitism
   than MATLAB's 5 % elite count. Duplicates are eliminated (and re-mated).
-  The GA runs with ``ga_operators``' array versions of pymoo's tournament,
-  survival and duplicate test: the same comparisons and random draws, without
-  pymoo's per-individual Python.
+  The GA runs as ``ga_operators.ArrayGA``: pymoo's GA on arrays, with pymoo's
+  operators and the same comparisons and random draws, without pymoo's
+  per-individual Python (NSGA-II keeps pymoo's algorithm).
 * seed → ``seed=`` of the algorithm: pymoo 0.6 draws every random number from
   one ``numpy.random.Generator`` seeded with it, and the planner is
   deterministic, so a seed fixes the run bit for bit.
@@ -257,7 +257,8 @@ def run_ga(problem, settings: GaSettings, *, progress: bool = False) -> RunResul
         progress: Show a tqdm bar (one tick per generation) on stderr.
     """
     pymoo_problem = _PymooProblem(problem, settings.constraint)
-    algorithm = ArrayGA(**settings.operators())
+    ops = settings.operators()
+    algorithm = ArrayGA(ops["pop_size"], ops["n_offsprings"], ops["crossover"], ops["mutation"])
     wall_s, batches = _drive(algorithm, pymoo_problem, settings, progress, "GA")
     return _result(pymoo_problem.log, wall_s, batches)
 

@@ -1,30 +1,54 @@
-"""pymoo's GA operators with the per-individual Python taken out, same draws, same results.
+"""pymoo's GA run on arrays: its operators and random draws, without its per-individual Python.
 
-pymoo 0.6 keeps a population as an array of ``Individual`` objects and reads it
-through ``Population.get``, which calls ``Individual.get`` (``hasattr``,
-``getattr``) once per individual and attribute. Between two calls of the compiled
-kernel that cost the GA about as much as scoring the 130 children: the survival
-reads (F, cv) of 260 individuals, every mating round reads X of the parents and of
-the children made so far for the duplicate test (about three rounds per
-generation), the binary tournament compares in a Python loop, and the optimum of
-the population is recomputed after every generation.
+pymoo 0.6 keeps a population as an array of ``Individual`` objects. Building them,
+and reading and writing their attributes through ``Population.get``/``set`` (one
+``getattr``/``setattr`` per individual and attribute), cost the paper-setting GA
+10–14 ms per generation on this machine, as much as scoring the 130 children
+with the compiled planner: Crossover and Mutation read X from the parents and
+write it into new individuals, every mating round (about five per generation,
+since duplicates are re-mated) reads the parents again for the duplicate test,
+the evaluator and survival read and write F, G and CV of every individual, and
+the optimum is recomputed after every generation.
 
-The replacements below read each attribute once per individual into an array and
-do the rest with numpy. They make the same comparisons in the same order and draw
-from the algorithm's random generator exactly when and as often as pymoo's do
-(the tournament draws only at ties, in tournament order), so a seed gives the same
-run bit for bit as with pymoo's own operators (``tests/experiments/test_ga.py``
-holds a run equal to one with pymoo's).
+``ArrayGA`` runs the same algorithm as ``pymoo.algorithms.soo.nonconvex.ga.GA``
+on (n, n_var) arrays of X, F and CV:
+
+* start: ``FloatRandomSampling`` (one ``random((n, n_var))`` draw in the bounds),
+  duplicates removed, evaluated; the initial population is not truncated;
+* mating, repeated until ``n_offsprings`` unique children exist (at most 100
+  rounds, as pymoo's ``Mating``): binary tournaments on pymoo's
+  ``random_permutations`` decided by (CV, F) as ``comp_by_cv_and_fitness`` does;
+  the crossover's own ``_do`` on the parents' (2, n_matings, n_var) array after
+  ``Crossover.do``'s draw of which pairs cross; the mutation's own ``_do`` after
+  ``Mutation.do``'s draw of which children mutate; children equal (Euclidean
+  distance ≤ 1e-16) to an earlier child, a parent or a child of an earlier round
+  dropped; the round's surplus cut from its end;
+* survival: the (μ + λ) truncation of parents then children by (CV, F), as
+  ``FitnessSurvival``'s lexsort.
+
+Every random number is drawn from the same ``numpy.random.Generator`` (seeded
+with the run's seed), at the same moment and in the same amount as pymoo draws
+it, so a seed gives pymoo's run bit for bit; ``tests/experiments/test_ga.py``
+holds a run equal to one of pymoo's own GA. The operators (SBX, PM) stay
+pymoo's: this module calls their array methods and never re-implements them.
+The per-generation cost left is measured by ``slopewalk benchmark ga``
+(``driver_ms_per_gen``).
+
+``ArrayDuplicates`` is pymoo's duplicate test for its own algorithms (NSGA-II),
+reading each population's X once per call.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from pymoo.algorithms.soo.nonconvex.ga import GA, FitnessSurvival
 from pymoo.core.duplicate import DefaultDuplicateElimination
-from pymoo.operators.selection.tournament import TournamentSelection
-from pymoo.util import default_random_state
-from pymoo.util.misc import cdist
+from pymoo.core.variable import get
+from pymoo.util.misc import cdist, random_permutations
+
+EPSILON = 1e-16  # distance at or below which two individuals are duplicates (pymoo's default)
+MAX_ROUNDS = 100  # mating rounds per generation at most (pymoo's GeneticAlgorithm)
 
 
 def _values(pop, name: str) -> np.ndarray:
@@ -32,92 +56,156 @@ def _values(pop, name: str) -> np.ndarray:
     return np.array([getattr(ind, name) for ind in pop])
 
 
-class ArrayDuplicates(DefaultDuplicateElimination):
-    """``DefaultDuplicateElimination`` (Euclidean distance ≤ 1e-16 to an earlier one).
+def _near(D: np.ndarray) -> np.ndarray:
+    """Rows of a distance matrix with an entry ≤ ``EPSILON`` (NaN counts as far)."""
+    return np.any(D <= EPSILON, axis=1)  # NaN <= EPSILON is False
 
-    Each population's X is read once per call instead of once per comparison; the
-    parents, passed in every mating round of a generation, are read once per
+
+def unique(X: np.ndarray, *others: np.ndarray) -> np.ndarray:
+    """Mask of the rows of X that duplicate neither an earlier row of X nor a row of ``others``.
+
+    pymoo's ``DefaultDuplicateElimination.do(pop, *others)``, on arrays: X is
+    tested against itself first, then against each of ``others`` in turn, only
+    the rows still kept being tested.
+    """
+    keep = np.ones(len(X), dtype=bool)
+    if len(X) == 0:
+        return keep
+    D = cdist(X, X)
+    D[np.triu_indices(len(X))] = np.inf
+    keep &= ~_near(D)
+    for other in others:
+        if len(other) == 0:
+            continue
+        if not keep.any():
+            break
+        kept = np.flatnonzero(keep)
+        keep[kept[_near(cdist(X[kept], other))]] = False
+    return keep
+
+
+class ArrayDuplicates(DefaultDuplicateElimination):
+    """``DefaultDuplicateElimination`` reading each population's X once per call.
+
+    The parents, passed in every mating round of a generation, are read once per
     generation.
     """
 
     def __init__(self) -> None:
-        super().__init__()
+        super().__init__(epsilon=EPSILON)
         self._parents, self._parents_X = None, None
 
-    def _X(self, pop) -> np.ndarray:
-        if pop is self._parents:
-            return self._parents_X
-        return _values(pop, "X")
+    def _X(self, pop, first: bool) -> np.ndarray:
+        if first and pop is not self._parents:  # the parents come first (infill)
+            self._parents, self._parents_X = pop, _values(pop, "X")
+        return self._parents_X if pop is self._parents else _values(pop, "X")
 
     def do(self, pop, *args, return_indices=False, to_itself=True):
-        if return_indices or len(pop) == 0:
+        if return_indices or not to_itself or len(pop) == 0:
             return super().do(pop, *args, return_indices=return_indices, to_itself=to_itself)
-        X = _values(pop, "X")
-        keep = np.ones(len(pop), dtype=bool)
-        if to_itself:
-            D = cdist(X, X)
-            D[np.triu_indices(len(X))] = np.inf
-            keep &= ~np.any(np.where(np.isnan(D), np.inf, D) <= self.epsilon, axis=1)
-        for i, other in enumerate(args):
-            if len(other) == 0:
-                continue
-            if not keep.any():
-                break
-            if i == 0 and other is not self._parents:  # the parents come first (infill)
-                self._parents, self._parents_X = other, _values(other, "X")
-            D = cdist(X[keep], self._X(other))
-            still = ~np.any(np.where(np.isnan(D), np.inf, D) <= self.epsilon, axis=1)
-            keep[np.flatnonzero(keep)[~still]] = False
-        return pop[keep]
+        others = [self._X(o, i == 0) if len(o) else np.empty((0, 0)) for i, o in enumerate(args)]
+        return pop[unique(_values(pop, "X"), *others)]
 
 
-@default_random_state
-def compare_by_cv_and_fitness(pop, P, random_state=None, **kwargs):
-    """pymoo's ``comp_by_cv_and_fitness`` on arrays: winner index per tournament, (n, 1).
+def tournament_winners(cv: np.ndarray, F: np.ndarray, P: np.ndarray, rng) -> np.ndarray:
+    """Winner index of each binary tournament (rows of P), as ``comp_by_cv_and_fitness``.
 
     A tournament between a and b is decided by the constraint violation if either
     violates, else by the objective; the smaller wins, a tie (or NaN) is drawn by
-    ``random_state.choice([a, b])``, in tournament order as pymoo draws them.
+    ``rng.choice([a, b])``, in tournament order as pymoo draws them.
     """
-    cv = _values(pop, "CV")[:, 0]
-    F = _values(pop, "F")[:, 0]
     a, b = P[:, 0], P[:, 1]
     by_cv = (cv[a] > 0.0) | (cv[b] > 0.0)
     va = np.where(by_cv, cv[a], F[a])
     vb = np.where(by_cv, cv[b], F[b])
     S = np.where(va < vb, a, b)
     for i in np.flatnonzero(~(va < vb) & ~(va > vb)):
-        S[i] = random_state.choice([a[i], b[i]])
-    return S[:, None].astype(int)
+        S[i] = rng.choice([a[i], b[i]])
+    return S
 
 
-class ArraySurvival(FitnessSurvival):
-    """``FitnessSurvival``: the (μ + λ) truncation by (cv, F), reading each value once."""
+class ArrayGA:
+    """pymoo's single-objective GA on arrays (module doc), driven like a pymoo algorithm.
 
-    def _do(self, problem, pop, n_survive=None, **kwargs):
-        F = _values(pop, "F")
-        cv = _values(pop, "CV")[:, 0]
-        S = np.lexsort([F[:, 0], cv])
-        pop.set("rank", np.argsort(S))
-        return pop[S[:n_survive]]
+    ``setup(problem, termination=("n_gen", G), seed=s)``, then ``next()`` while
+    ``has_next()``: the first call samples and evaluates the initial population,
+    each later one mates, evaluates and survives one generation, so G calls make
+    the G generations of pymoo's ``("n_gen", G)``. ``problem`` is a pymoo
+    ``Problem`` (bounds ``xl``, ``xu``; ``evaluate``).
 
-
-class ArrayGA(GA):
-    """pymoo's GA with the operators above; ``opt`` is set once, when the run ends.
-
-    pymoo recomputes ``opt`` (the population's best) after every generation for its
-    display and result; neither is used while the run goes (termination is by
-    generation count), so ``finish`` computes it once at the end.
+    Attributes:
+        X, F, CV: The current population: (n, n_var), (n, 1) objective, (n,) violation.
     """
 
-    def __init__(self, **kwargs):
-        kwargs.setdefault("selection", TournamentSelection(func_comp=compare_by_cv_and_fitness))
-        kwargs.setdefault("survival", ArraySurvival())
-        super().__init__(**kwargs)
+    def __init__(self, pop_size, n_offsprings, crossover, mutation):
+        if crossover.n_parents != 2 or crossover.n_offsprings != 2:
+            raise ValueError("ArrayGA needs a crossover of 2 parents into 2 children")
+        self.pop_size, self.n_offsprings = pop_size, n_offsprings
+        self.crossover, self.mutation = crossover, mutation
 
-    def _set_optimum(self) -> None:
-        pass
+    def setup(self, problem, termination, seed) -> ArrayGA:
+        kind, self.generations = termination
+        if kind != "n_gen":
+            raise ValueError(f"termination {termination!r}: ArrayGA stops after ('n_gen', G)")
+        self.problem, self.rng, self.done = problem, np.random.default_rng(seed), 0
+        self.values = ["F"] + (["G"] if problem.n_ieq_constr > 0 else [])
+        return self
+
+    def has_next(self) -> bool:
+        return self.done < self.generations
+
+    def next(self) -> None:
+        if self.done == 0:
+            p = self.problem
+            X = p.xl + (p.xu - p.xl) * self.rng.random((self.pop_size, p.n_var))
+            X = X[unique(X)]
+            self.X, self.F, self.CV = X, *self._evaluate(X)
+        else:
+            X = self._mate()
+            F, CV = self._evaluate(X)
+            X, F, CV = (np.concatenate(v) for v in ((self.X, X), (self.F, F), (self.CV, CV)))
+            keep = np.lexsort([F[:, 0], CV])[: self.pop_size]
+            self.X, self.F, self.CV = X[keep], F[keep], CV[keep]
+        self.done += 1
 
     def finish(self) -> None:
-        """Set ``opt`` as pymoo's GA would have after the last generation."""
-        GA._set_optimum(self)
+        pass
+
+    def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(F (n, 1), CV (n,)): pymoo's CV is the sum of the positive parts of G."""
+        out = self.problem.evaluate(X, return_values_of=self.values, return_as_dictionary=True)
+        G = out.get("G")
+        cv = np.zeros(len(X)) if G is None else np.maximum(0.0, G).sum(axis=1)
+        return out["F"], cv
+
+    def _mate(self) -> np.ndarray:
+        """``n_offsprings`` unique children of the current population, pymoo's draws."""
+        off = np.empty((0, self.problem.n_var))
+        for _ in range(MAX_ROUNDS):
+            if len(off) >= self.n_offsprings:
+                break
+            n_matings = math.ceil((self.n_offsprings - len(off)) / 2)
+            children = self._children(n_matings)
+            children = children[unique(children, self.X, off)]
+            off = np.concatenate([off, children[: self.n_offsprings - len(off)]])
+        return off
+
+    def _children(self, n_matings: int) -> np.ndarray:
+        """Tournament, crossover and mutation of one mating round, (2 n_matings, n_var)."""
+        rng = self.rng
+        n_random = n_matings * 2 * 2  # two parents per mating, two entrants per tournament
+        P = random_permutations(math.ceil(n_random / len(self.X)), len(self.X), random_state=rng)
+        S = tournament_winners(self.CV, self.F[:, 0], P[:n_random].reshape(-1, 2), rng)
+        X = np.swapaxes(self.X[S.reshape(n_matings, 2)], 0, 1)  # (parent, mating, variable)
+        # Crossover.do: which pairs cross, then the operator on all pairs; a pair that does
+        # not cross passes both parents on (two children of two parents: no draw)
+        cross = rng.random(n_matings) < get(self.crossover.prob, size=n_matings)
+        Xp = X.copy()
+        if cross.any():
+            Xp[:, cross] = self.crossover._do(self.problem, X, random_state=rng)[:, cross]
+        Xp = Xp.reshape(-1, X.shape[-1])
+        # Mutation.do: the operator on all children, then which children keep its result
+        mutated = self.mutation._do(self.problem, Xp, random_state=rng)
+        keep = rng.random(len(Xp)) <= get(self.mutation.prob, size=len(Xp))
+        Xp[keep] = mutated[keep]
+        return Xp
