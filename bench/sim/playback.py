@@ -12,6 +12,11 @@ MuJoCo runs it in C and many trials can share threads (``play_many``). Sensor
 rows are computed in each step's forward pass, i.e. row k describes the state at
 the start of step k; that is the time base used here.
 
+Feedforward modes ("_ff") command more than the planned angles: the plan's torque
+over kp (``feedforward_torque``), and the ankle turns that cancel the soft floor's
+give (``floor.give_feedforward``, for the compiled scene's corner stiffness), so the
+robot stays where the plan has it and the swing sole lands at the planned time.
+
 Divergence: when MuJoCo meets a bad acceleration it warns and resets the state,
 which shows as the rollout's time running backwards; the recording is cut there
 and marked ``diverged``. No exception escapes.
@@ -26,6 +31,7 @@ import numpy as np
 from mujoco import rollout
 
 from bench.sim.contact import TrialSensors, add_trial_sensors, decode
+from bench.sim.floor import give_feedforward, scene_corner_stiffness
 from bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
 from planner.joints import stance_swing_to_left_right
 from planner.kinematics import Chain, rotation_slope_to_world
@@ -47,6 +53,10 @@ class Recording:
         sensors: Decoded sensor series (``contact.TrialSensors``), in S.
         force_limit: Actuator torque limit [N m].
         diverged_at: Time the simulation blew up [s], or None.
+        aim_offset: What the command aims the joints at beyond the planned angles, MJCF
+            order [rad], (m, 8): a feedforward mode's ankle turns against the floor's give
+            (``aim_offset``); None: the planned angles themselves (also for a closed-loop
+            controller, whose own aim is not known here).
     """
 
     t: np.ndarray
@@ -54,6 +64,7 @@ class Recording:
     sensors: TrialSensors
     force_limit: float
     diverged_at: float | None
+    aim_offset: np.ndarray | None = None
 
 
 def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float):
@@ -91,22 +102,52 @@ def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:
 
 
 def control_sequence(
-    plan: Plan, timestep: float, settle: float, hold: float, servo: Servo | None = None
+    plan: Plan,
+    timestep: float,
+    settle: float,
+    hold: float,
+    servo: Servo | None = None,
+    *,
+    floor_stiffness: float | None = None,
 ):
     """Row times [s] (walk starts at 0) and commands, MJCF order, (m, 8).
 
     The command is the planned angle [rad], linearly interpolated to the rows; with a
     feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``, held at its
     first and last value while settling and holding), which adds τ_ff to the actuator's
-    force (``model.Servo``).
+    force (``model.Servo``), and turned by ``aim_offset``.
+
+    Args:
+        floor_stiffness: k_c of each sole corner of the scene's floor [N/m]
+            (``floor.scene_corner_stiffness``); None: a rigid floor, no give to cancel.
     """
-    m = int(round((settle + plan.t[-1] + hold) / timestep))
-    t = np.arange(m) * timestep - settle
-    q_ref = np.column_stack([np.interp(t, plan.t, plan.q_left_right[:, j]) for j in range(8)])
+    t = _rows(plan, timestep, settle, hold)
+    q_ref = _on_rows(t, plan, plan.q_left_right)
     if servo is not None and servo.feedforward:
-        tau = feedforward_torque(plan, servo)
-        q_ref += np.column_stack([np.interp(t, plan.t, tau[:, j]) for j in range(8)]) / servo.kp
+        q_ref += _on_rows(t, plan, feedforward_torque(plan, servo)) / servo.kp
+        q_ref += _on_rows(t, plan, aim_offset(plan, servo, floor_stiffness))
     return t, q_ref
+
+
+def aim_offset(plan: Plan, servo: Servo | None, floor_stiffness: float | None) -> np.ndarray:
+    """What a mode aims the joints at beyond the plan, MJCF order [rad], (n, 8) on ``plan.t``.
+
+    A feedforward mode on a soft floor turns the ankles by ``floor.give_feedforward``;
+    otherwise zero.
+    """
+    if servo is None or not servo.feedforward or floor_stiffness is None:
+        return np.zeros((plan.t.size, 8))
+    return give_feedforward(plan, floor_stiffness)
+
+
+def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray:
+    m = int(round((settle + plan.t[-1] + hold) / timestep))
+    return np.arange(m) * timestep - settle
+
+
+def _on_rows(t: np.ndarray, plan: Plan, x: np.ndarray) -> np.ndarray:
+    """``x`` (n, 8) on ``plan.t`` interpolated to the rows ``t``, ends held."""
+    return np.column_stack([np.interp(t, plan.t, x[:, j]) for j in range(x.shape[1])])
 
 
 def feedforward_torque(plan: Plan, servo: Servo) -> np.ndarray:
@@ -181,10 +222,16 @@ def play_many(
         first = plans[members[0]]
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
-        controls, states, times = [], [], None
+        floor = scene_corner_stiffness(model)
+        controls, aims, states, times = [], [], [], None
+        aiming = servo.feedforward
         for i in members:
-            times, q_ref = control_sequence(plans[i], timestep, settle, hold, servo)
+            times, q_ref = control_sequence(
+                plans[i], timestep, settle, hold, servo, floor_stiffness=floor
+            )
             controls.append(q_ref)
+            offset = aim_offset(plans[i], servo, floor)
+            aims.append(_on_rows(times, plans[i], offset) if aiming else None)
             states.append(initial_state(model, plans[i]))
         datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(members))))]
         state, sensordata = rollout.rollout(model, datas, np.array(states), np.array(controls))
@@ -192,18 +239,25 @@ def play_many(
         limit = servo.force_limit
         for row, i in enumerate(members):
             out[i] = recording_from_rollout(
-                model, state[row], sensordata[row], times, controls[row], R_ws, limit
+                model,
+                state[row],
+                sensordata[row],
+                times,
+                controls[row],
+                R_ws,
+                limit,
+                aim_offset=aims[row],
             )
     return out
 
 
 def recording_from_rollout(
-    model, state, sensordata, t, q_ref, rotation_slope_to_world, force_limit
+    model, state, sensordata, t, q_ref, rotation_slope_to_world, force_limit, *, aim_offset=None
 ) -> Recording:
     """A ``Recording`` from one rollout's states (m, nstate) and sensor rows (m, nsensor).
 
     A MuJoCo reset (time running backwards) or a non-finite row cuts the series
-    there and sets ``diverged_at``.
+    there and sets ``diverged_at``. ``aim_offset`` (m, 8): ``Recording.aim_offset``.
     """
     clock = state[:, 0]  # time after each step
     reset = np.flatnonzero(np.diff(clock) <= 0)
@@ -220,4 +274,5 @@ def recording_from_rollout(
         sensors=decode(model, sensordata[:cut], rotation_slope_to_world),
         force_limit=force_limit,
         diverged_at=float(t[min(cut, t.size - 1)]) if diverged else None,
+        aim_offset=None if aim_offset is None else aim_offset[:cut],
     )

@@ -12,7 +12,9 @@ the motion, e.g. with ``mj_kinematics``.
 walk's time base, their RMS and max distance over the samples where the robot
 stands (before any tip or fall, both values finite), the margin of each to the
 planned support polygon, both verdicts, the events, the required friction ratio
-against μ, and planned vs simulated joint angles.
+against μ, and planned vs simulated joint angles. Joint tracking is measured from
+the angles the playback aims at (``Recording.aim_offset``): the planned ones, plus the
+ankle turns a feedforward mode adds to cancel the floor's give.
 
 Analytic verdicts (``prediction.py``): the paper's, ``analytic_verdict``: ``stable``
 when the planned ZMP stays inside the support polygon at every sample, else
@@ -98,7 +100,7 @@ class TrialResult:
     simulated_min_margin: float  # [m], simulated CoP to the planned support polygon
     max_friction_ratio: float  # analytic |F_t|/F_n
     simulated_max_friction_ratio: float  # measured, while standing
-    tracking_rms: float  # [rad], all joints, while standing
+    tracking_rms: float  # [rad], all joints, while standing, from the angles aimed at
     peak_torque_planned: float  # [N m]
     peak_torque_simulated: float  # [N m]
     wall_s: float
@@ -263,7 +265,8 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
     rows = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(lost, default=np.inf))
     support = support_difference(plan, recording, rows)
     q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
-    tracking = (s.q[walk] - q_plan)[standing]
+    q_aim = q_plan if recording.aim_offset is None else q_plan + recording.aim_offset[walk]
+    tracking = (s.q[walk] - q_aim)[standing]
     force = s.foot_force[walk].sum(axis=1)[standing]
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.hypot(force[:, 0], force[:, 1]) / force[:, 2]
