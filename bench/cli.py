@@ -337,6 +337,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _command(
         sub,
+        "cop-error",
+        "the flat slow walk's simulated CoP vs analytic ZMP, taken apart by phase and cause",
+        "Play flat ground at 2 s steps (the default robot, mu 1) in the stiff modes, with and "
+        "without the floor's give fed forward, and with stiffer contacts and finer time "
+        "steps, and write a markdown report of the CoP - ZMP distance by phase window, the "
+        "touch-down timing, the plan's ZMP jumps at phase changes and the double support's "
+        "foot slide.",
+        "slopewalk cop-error --out results/cop_error.md",
+    )
+    p.add_argument("--out", required=True, metavar="FILE", help="markdown report")
+    p.set_defaults(run=commands.cop_error)
+
+    p = _command(
+        sub,
         "envelope",
         "the best gait of every step time x slope cell, by the GA, walked in MuJoCo (resumable)",
         "For every cell of an envelope file (step time x slope x friction x robot; format in "

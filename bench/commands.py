@@ -218,6 +218,17 @@ def fidelity(args) -> None:
     print(f"wrote {args.out}")
 
 
+def cop_error(args) -> None:
+    from bench.report.cop_error import cop_error_report
+    from planner.spec import load_spec
+
+    check_output(args.out)
+    text = cop_error_report(load_spec(), command=f"slopewalk cop-error --out {args.out}")
+    with atomic_paths(args.out) as (tmp,):
+        tmp.write_text(text)
+    print(f"wrote {args.out}")
+
+
 def compare(args) -> None:
     from bench.experiments import compare as comparison
     from planner.spec import load_spec

@@ -82,6 +82,7 @@ DEFAULT_OUT = {  # an --out is added where a row has none
     "sweep": "{out}",
     "controllers": "{out}/c.md",
     "envelope": "{out}",
+    "cop-error": "{out}/c.md",
 }
 CASES = [
     # numbers at the command line
@@ -151,6 +152,7 @@ CASES = [
     (["controllers", "--controller", "no_such_module:f"], "no module named 'no_such_module'"),
     (["controllers", "--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
     (["controllers", "--out", "{out}"], "--out '{out}': is a directory"),
+    (["cop-error", "--out", "{out}"], "--out '{out}': is a directory"),
     (
         ["envelope", "{in}/envelope_module.toml"],
         "envelope_module.toml: grid.controller: controller 'no_such_module:f': no module named",

@@ -1,0 +1,63 @@
+"""The flat walk's CoP error taken apart: phase windows, the plan's ZMP jumps, the report."""
+
+import numpy as np
+import pytest
+
+from bench.report.cop_error import (
+    WINDOW,
+    WINDOWS,
+    by_window,
+    cop_error_report,
+    phase_windows,
+    run_case,
+    zmp_jumps,
+)
+from planner.plan import plan_walk
+from planner.trajectory import GaitParams
+
+
+@pytest.fixture(scope="module")
+def plan(spec):
+    return plan_walk(spec, GaitParams.nominal(spec, 2.0, steps=2))
+
+
+def test_the_windows_cut_each_phase_at_its_changes(plan):
+    t = plan.t
+    window = phase_windows(plan, t)
+    double = plan.double_support
+    assert set(window[double]) == {3, 4} and set(window[~double]) == {0, 1, 2}
+    per_window = round(WINDOW / plan.params.dt)
+    # 2 steps: 2 lift-offs, 2 touch-downs (the walk's first DSP starts at t = 0)
+    for w in (0, 2, 3):
+        assert abs(np.count_nonzero(window == w) - 2 * per_window) <= 2, WINDOWS[w]
+    first_touch_down = np.searchsorted(t, plan.params.step_time - 1e-9)
+    assert window[first_touch_down - 1] == 2 and window[first_touch_down + 1] == 3
+
+
+def test_the_planned_zmp_jumps_where_the_leans_acceleration_does(spec, plan):
+    """The hold lean's cubic has λ̈ = 12 tilt / T_dsp² at a touch-down and 0 in single
+    support: the CoM, ~0.15 m up, steps its lateral acceleration by about h λ̈, and the
+    ZMP by about h² λ̈ / g (order of magnitude: within a factor of two)."""
+    lift, touch, typical = zmp_jumps(plan)
+    dsp = (1 - plan.params.ssp_fraction) * plan.params.step_time
+    h = plan.com[:, 2].mean()
+    estimate = h**2 * 12 * plan.params.tilt / dsp**2 / 9.81
+    assert estimate / 2 < touch < 2 * estimate
+    assert lift > 50 * typical and touch > 50 * typical
+
+
+def test_the_windows_share_out_the_whole_mean_square(plan):
+    case = run_case(plan, "stiff_ff", "stiff_ff")
+    rows = by_window(case, plan)
+    assert sum(share for _, share, *_ in rows) == pytest.approx(1.0)
+    assert sum(part for *_, part in rows) == pytest.approx(1.0)
+    rms = np.sqrt(sum(share * r**2 for _, share, r, _, _ in rows))
+    assert rms == pytest.approx(case.result.zmp_rms)
+
+
+def test_the_report_names_its_command_and_every_case(spec):
+    text = cop_error_report(spec, command="slopewalk cop-error --out x.md")
+    assert "Written by `slopewalk cop-error --out x.md`" in text
+    for label in ("| stiff |", "| stiff_ff |", "ankles aimed as on a rigid floor"):
+        assert label in text
+    assert "## Double support: the plan moves a loaded foot" in text
