@@ -148,6 +148,11 @@ def _goals(rows) -> list[str]:
             f"{r['zmp_max_mm']:.1f} mm, unplanned support {r['unplanned_support_s']:.3f} s"
             for r in flat
         ]
+        lines += [
+            "",
+            "Taken apart by phase and cause (touch-down, the floor's give, the double "
+            "support's foot slide): `slopewalk cop-error`, results/cop_error.md.",
+        ]
     ff = [
         r
         for r in rows
