@@ -40,9 +40,11 @@ Each foot's load and CoP come from the plan: in single support the stance foot
 carries the whole ground force at the ZMP; in double support each foot carries
 the plan's share F_i (``planner.plan``'s load split) at p_i = m_i + (p − m̄), with
 m̄ = Σ F_i m_i / Σ F_i: the shares' moments add up to the planned ZMP's, and p_i
-is the ZMP itself when a foot carries everything, so the give is continuous at
-every phase change. First order: the sole turns about its corners' centroid, the
-ankle about its axis 32 mm above it (a 0.2 mm horizontal shift at 6 mrad); the
+is the ZMP itself when a foot carries everything, so the hand-over from foot to
+foot adds no jump (the give jumps only where the planned ZMP does: at the phase
+changes, where the lean's acceleration steps). First order: the sole turns about
+its corners' centroid, the ankle about its axis an ankle height above it (a 0.2 mm
+horizontal shift at 6 mrad for the default robot); the
 sink F_n / 4 k_c (0.23 mm at the whole weight) is not fed forward: lengthening the
 legs by it makes the unloading foot of a double support lose contact (measured:
 unplanned support 0.14 → 1.17 s on flat ground at 2 s steps), because the plan's
