@@ -207,10 +207,40 @@ def disagreement_cause(r) -> str:
     rotation = f"predicted support tilt {r['predicted_rotation_deg']:.2f}°"
     cause = f"**{cause_class(r)}**: "
     if _walks(r["predicted_verdict"]):
-        return cause + f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
-    return cause + (
+        line = f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
+        return cause + line + (servo_loop_figures(r) if cause_class(r) == "servo sway" else "")
+    line = (
         f"predicted {r['predicted_verdict']} ({_events(r['predicted_events'])}; {rotation}), "
         f"yet the robot walked ({_events(r['events'])}); {plan}; {tracking}; {support}"
+    )
+    return cause + line + (servo_loop_figures(r) if cause_class(r) == "survived saturation" else "")
+
+
+def servo_loop_figures(r) -> str:
+    """The servo loop's dynamics on a row's walk (``planner.servo_loop``), as a clause.
+
+    Re-plans the row (default robot, no mass scaling; else "") and integrates the
+    servo loop along it (its output clipped at the torque limit): the walk's margin and
+    the support tilt predicted on it, saturation acting only through what it does.
+    """
+    if r.get("robot") != "default" or (r.get("mass_scale") or "none") != "none":
+        return ""
+    from bench.sim.prediction import servo_loop_prediction
+    from planner.plan import plan_walk
+    from planner.spec import load_spec
+    from planner.trajectory import GaitParams
+
+    spec = load_spec()
+    gait = GaitParams.nominal(
+        spec, r["step_time"], slope=float(np.deg2rad(r["slope_deg"])), steps=int(r["steps"])
+    )
+    walk, prediction = servo_loop_prediction(
+        plan_walk(spec, gait), friction=r["friction"], actuators=r["actuators"]
+    )
+    return (
+        f"; with the servo loop's dynamics (`planner/servo_loop.py`) the walk's margin is "
+        f"{walk.plan.margin.min() * 1e3:.1f} mm and the predicted support tilt "
+        f"{np.rad2deg(prediction.rotation.max()):.2f}° ({prediction.verdict})"
     )
 
 

@@ -28,6 +28,7 @@ from bench.sim.model import scene_xml, servo_settings
 from bench.sim.playback import feedforward_stance_swing
 from planner.compliance import CompliantWalk, compliant_walk
 from planner.plan import Plan
+from planner.servo_loop import servo_walk
 from planner.verdict import Prediction, predict
 
 
@@ -80,3 +81,36 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         walk=walk,
         prediction=prediction,
     )
+
+
+def servo_loop_prediction(
+    plan: Plan, *, friction: float, actuators: str
+) -> tuple[CompliantWalk, Prediction]:
+    """The servo loop's dynamics (``planner.servo_loop``) on ``plan``, and what it predicts.
+
+    A diagnostic beside ``predict_trial``: the walk the loop makes integrated through
+    time (its sway about the static fixed point, the output clipped at the torque
+    limit), and the events ``predict`` finds on it. Saturation is left to the clipped
+    walk's own consequences (no ``saturation`` event).
+    """
+    servo = servo_settings(plan.spec, actuators)
+    walk = servo_walk(
+        plan,
+        stiffness=servo.kp,
+        velocity_gain=servo.kv,
+        damping=servo.damping,
+        armature=servo.armature,
+        force_limit=servo.force_limit,
+        feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
+    )
+    scene = mujoco.MjModel.from_xml_string(
+        scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
+    )
+    prediction = predict(
+        plan,
+        friction=friction,
+        walk=walk,
+        stiffness=servo.kp,
+        floor_stiffness=scene_corner_stiffness(scene),
+    )
+    return walk, prediction
