@@ -5,42 +5,51 @@ torques the walk needs, a static fixed point. A soft loop (the AX-12A's kp = 9.2
 N m/rad on a rotor inertia A = 0.0232 kg m², damped only by the motor's back-EMF
 d = stall torque / no-load speed = 0.243 N m s/rad) is a lightly damped
 mass-spring: the joint's own mode has ω = √(kp / A) ≈ 20 rad/s (3.2 Hz) and
-ζ = d / (2 √(kp A)) ≈ 0.27; loaded by the robot leaning on the stance ankle it
-is lower (≈ 2.5 Hz). Every jump of the torque the walk needs (the clamped cubic
-splines' accelerations jump at each via point, and A q̈ with them) rings that
-mode, and a static fixed point cannot see it. Measured in MuJoCo (default robot,
-servo, 2 s steps on flat ground): the joints ring at 2.5–2.8 Hz about the static
-fixed point, 0.4–1.0° RMS, and the contact CoP rolls onto the stance foot's inner
-edge 7–10 mm beyond where the fixed point's ZMP stays; the joints' departure from
-the fixed point peaks at 2.3–2.8 Hz (above the gait's own 0.5 Hz harmonics),
-0.4–1.0° RMS. This model on the same walk: 2.3–3.3 Hz, 0.2–0.85° RMS, and it
-brings the reached walk's ZMP margin from 3.3 mm (fixed point) to −0.5 mm
-(1.5 s steps: 2.0 to −3.8 mm).
+ζ = d / (2 √(kp A)) ≈ 0.27, lower with the links on it. Every jump of the torque
+the walk needs rings that mode, and a static fixed point cannot see it: the
+clamped cubic splines' accelerations jump at each via point (and A q̈ with them),
+and above all the load jumps at lift-off. In double support both soles are flat on
+the plane: the legs form a closed chain that holds the sway (with no hip roll
+joint the frontal chain cannot move at all), and the load on each foot is what the
+chain's compliance makes it, not the plan's smooth split. Measured in MuJoCo
+(default robot, ``servo``, 2 s steps on flat ground): the foot about to lift still
+carries 2.4 N (37 % of the weight) at the end of double support, where the plan
+has it at 0, and unloads within 0.1 s; the stance leg then takes the load in one
+go, the robot sways towards the swing side and the contact CoP sits on the stance
+sole's inner edge for 0.4 s (where the fixed point's ZMP stays 5–10 mm inside);
+the joints' departure from the fixed point peaks at 2.3–2.8 Hz, 0.4–1.0° RMS.
 
-Model: the joint equation of the whole chain (rooted at the planned stance sole,
-the double-support load split of the plan, as in ``compliance``), linearised about
-the plan, q = q_ref + δ:
+Model: the joint equation of the chain rooted at the planned stance sole,
+linearised about the plan, q = q_ref + δ:
 
-    (M + A) δ̈ + (C + d) δ̇ + K_g δ = u − (τ_ref + A q̈_ref + d q̇_ref)
+    (M + A) δ̈ + (C + d) δ̇ + K_g δ = u − (τ_ref + A q̈_ref + d q̇_ref) + Jᵀ λ
 
-with τ_ref the Newton–Euler torque of the plan, M = ∂τ/∂q̈ its mass matrix,
-K_g = ∂τ/∂q its gravity (and load) stiffness, C = ∂τ/∂q̇ its velocity terms, all
-evaluated along the plan (n, 8, 8), and u the servo's output
+with τ_ref the Newton–Euler torque of the plan (with its double-support split),
+M = ∂τ/∂q̈ its mass matrix, K_g = ∂τ/∂q its gravity (and load) stiffness,
+C = ∂τ/∂q̇ its velocity terms, all along the plan (n, 8, 8), and u the servo's output
 
     u = clip(kp (−δ) − kv (q̇_ref + δ̇) + τ_ff, ±τ_max)
 
-clipped as MuJoCo clips the actuator force (``forcerange``). It is integrated by
-backward Euler on the plan's time base (1 ms: ω dt ≈ 0.02, numerical damping
-ω dt / 2 ≈ 0.01, small against ζ); a joint whose output is clipped at a sample
-gets the constant ±τ_max in that row. The walk it returns (q_ref + δ and its rates
-and accelerations, re-run through the analytic pipeline) carries the sway's ZMP,
-which the tipping predictor judges like any other. Saturation thereby acts through
-what it does (the joint falls behind, the ZMP moves) rather than through "the
-torque exceeds the limit somewhere".
+clipped as MuJoCo clips the actuator force (``forcerange``). In double support
+the second sole stays where it is: J δ̇ = 0 with J its pose's Jacobian (rows x, z,
+roll, pitch: ``HELD``), λ the ground's wrench beyond the plan's split; touching
+down, the sole stops in a plastic impact (``_landed``). In single support λ = 0.
+Integrated by backward Euler on the plan's time base (1 ms: ω dt ≈ 0.02, numerical
+damping ω dt / 2 ≈ 0.01, small against ζ); a joint whose output is clipped gets the
+constant ±τ_max in its row. The walk returned (q_ref + δ and its rates and
+accelerations, re-run through the analytic pipeline) carries the sway's ZMP, which
+the tipping predictor judges like any other; saturation acts through what it does
+(the joint falls behind, the ZMP moves).
 
-Not modelled: the joints' dry friction (``friction_loss``, 0.011 N m, < 1 % of
-the stall torque), and the closed chain of double support (both feet on the
-ground constrain the legs' sway; here the plan's load split drives each leg).
+The same walk in this model: the ZMP passes the inner edge by 5.5 mm at lift-off
+(the fixed point keeps 3.3 mm of margin), and the joint angles come 0.2–0.8° RMS
+from MuJoCo's on the stance leg (the fixed point: 0.4–1.0°); the swing ankle is
+worse (0.9–1.0° against 0.7°). It predicts the tip one step early (1.25 s, MuJoCo
+3.53 s): MuJoCo's robot rolls 2° in the first single support and recovers.
+
+Not modelled: the joints' dry friction (``friction_loss``, 0.011 N m, < 1 % of the
+stall torque), a double-support sole lifting or sliding (the constraint is
+bilateral), and the swing sole touching the plane in single support (``strike``).
 """
 
 from __future__ import annotations
@@ -49,6 +58,7 @@ import numpy as np
 
 from planner.compliance import CompliantWalk, _Dynamics
 from planner.errors import SlopewalkError
+from planner.kinematics import Chain
 from planner.plan import Plan
 
 STEP = 1e-6  # [rad, rad/s]: central-difference step for K_g and C (τ is smooth in q, q̇)
@@ -80,6 +90,53 @@ def linearised(plan: Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     return tau, mass, stiffness, velocity
 
 
+def support_jacobian(plan: Plan) -> np.ndarray:
+    """∂(second sole's pose)/∂q along the plan, (n, 6, 8): rows x, y, z [m/rad], then the
+    sole's rotation vector in S [rad/rad], by central differences of the chain's poses."""
+    chain = Chain.from_spec(plan.spec)
+    q, n = plan.q, plan.q.shape[1]
+    jac = np.empty((q.shape[0], 6, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = STEP
+        Rp, op = chain.poses(q + e, plan.stance_sole, plan.stance)
+        Rm, om = chain.poses(q - e, plan.stance_sole, plan.stance)
+        jac[:, :3, j] = ((op[9] - om[9]) / (2 * STEP)).T
+        # R₊ R₋ᵀ ≈ I + [2 STEP ω]ₓ: its skew part is the rotation per radian
+        W = np.einsum("ikn,jkn->nij", Rp[9], Rm[9])
+        jac[:, 3:, j] = np.stack([W[:, 2, 1] - W[:, 1, 2], W[:, 0, 2] - W[:, 2, 0],
+                                  W[:, 1, 0] - W[:, 0, 1]], axis=1) / (4 * STEP)  # fmt: skip
+    return jac
+
+
+# The rows the flat second sole holds in double support: x, z, roll and pitch. Its lateral
+# slide (y) is its roll times the ankle height to first order (no hip roll joint), the
+# rest of it second order in the lean, and no joint turns the sole in yaw.
+HELD = [0, 2, 3, 4]
+
+
+def _constrained(matrix, rhs, jac, target):
+    """Solve matrix x − jacᵀ λ = rhs, jac x = target (min-norm where jac is rank deficient)."""
+    dof, rows = matrix.shape[0], jac.shape[0]
+    kkt = np.zeros((dof + rows, dof + rows))
+    kkt[:dof, :dof], kkt[:dof, dof:], kkt[dof:, :dof] = matrix, -jac.T, jac
+    return np.linalg.lstsq(kkt, np.concatenate([rhs, target]), rcond=None)[0][:dof]
+
+
+def _landed(mass, jac, rate):
+    """Joint rates after a plastic impact that stops the second sole (J q̇⁺ = 0).
+
+    The impulse p = −(J M⁻¹ Jᵀ)⁺ J q̇ acts at the sole: q̇⁺ = q̇ + M⁻¹ Jᵀ p. Kept out of
+    the recorded accelerations: an impulse has no ZMP (the tipping model's landing
+    law is what such an impact does to a rocking support).
+    """
+    speed = jac @ rate
+    if not np.abs(speed).max() > 0:
+        return rate
+    mj = np.linalg.solve(mass, jac.T)  # M⁻¹ Jᵀ
+    return rate - mj @ (np.linalg.pinv(jac @ mj) @ speed)
+
+
 def servo_walk(
     plan: Plan,
     *,
@@ -89,6 +146,7 @@ def servo_walk(
     armature: float = 0.0,
     force_limit: float = np.inf,
     feedforward: np.ndarray | None = None,
+    closed_chain: bool = True,
 ) -> CompliantWalk:
     """The walk a servo loop makes, integrated through time (module doc).
 
@@ -101,10 +159,14 @@ def servo_walk(
         armature: Rotor inertia A [kg m²].
         force_limit: The servo's torque limit τ_max [N m], > 0.
         feedforward: τ_ff fed into the loop [N m], Table-I order, (n, 8); None for none.
+        closed_chain: In double support the second sole stays where it is on the plane
+            (module doc); False: it moves with the sway, loaded by the plan's split.
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
-        where the integration left finite numbers, and the loop's (clipped) output.
+        where a joint left the plan by π or more (the loop let go; the pose is held
+        from there), and the loop's request kp (−δ) − kv q̇ + τ_ff before clipping
+        (beyond ±τ_max the servo delivers ±τ_max).
     """
     if not stiffness > 0:
         raise SlopewalkError(f"stiffness {stiffness!r} N m/rad: must be > 0")
@@ -121,13 +183,19 @@ def servo_walk(
     rate = np.zeros((n, dof))
     accel = np.zeros((n, dof))
     loop = np.zeros((n, dof))
+    both = plan.double_support & closed_chain
+    jac = support_jacobian(plan)[:, HELD] if both.any() else None
     # start at rest in the static fixed point of the first sample (the robot has settled)
     k0 = gravity_k[0] + stiffness * eye
-    d = np.linalg.solve(k0, -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0]))
+    f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])
+    d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
     v = np.zeros(dof)
     finite = True
     for k in range(n):
         h = dt[k]
+        if k and plan.stance[k] != plan.stance[k - 1]:
+            # the legs swap roles: Table-I order reverses (stance roll … ↔ … swing roll)
+            d, v = d[::-1].copy(), v[::-1].copy()
         raw = -stiffness * d - velocity_gain * (plan.qd[k] + v) + tau_ff[k]
         free = np.abs(raw) <= force_limit
         held = np.where(free, 0.0, np.clip(raw, -force_limit, force_limit))
@@ -136,7 +204,13 @@ def servo_walk(
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
         force = held + np.where(free, tau_ff[k] - velocity_gain * plan.qd[k], 0.0) - need[k]
         # backward Euler: v' = v + h a, δ' = δ + h v'
-        a = np.linalg.solve(m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v))
+        matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+        if both[k] and h > 0:  # the second sole stops and stays: J v' = 0
+            v = _landed(m, jac[k], v)
+            rhs = force - c @ v - kk @ (d + h * v)
+            a = _constrained(matrix, rhs, jac[k], -jac[k] @ v / h)
+        else:
+            a = np.linalg.solve(matrix, rhs)
         v = v + h * a
         d = d + h * v
         if not (np.isfinite(d).all() and np.abs(d).max() < np.pi):
@@ -145,7 +219,7 @@ def servo_walk(
             loop[k:] = loop[k - 1]
             break
         delta[k], rate[k], accel[k] = d, v, a
-        loop[k] = np.where(free, raw, held)
+        loop[k] = raw
     dyn = _Dynamics(plan)
     walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel)
     return CompliantWalk(walk, -delta, n, finite, loop)

@@ -21,11 +21,16 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   foot in double support drifts sideways by hip width × (1/cos λ − 1) as the lean
   changes, with no hip roll to absorb it) by more than ``SLIP_DISTANCE``.
 
-* ``saturation``: the walk needs more torque from a servo than its limit (the
-  stall torque for ``servo``): the joint cannot follow the plan from there on.
+* ``saturation``: the loop asks a servo for more torque than its limit (the stall
+  torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
+  Like that event it is reported and does not decide the verdict: the limit is
+  physical, and what it does is in the walk judged (``servo_loop``: the clipped
+  loop, the joint falling behind). Measured: ``servo_ff`` at 1 s steps asks the
+  swing knee for 2.06 N m of 1.5 for 0.45 s and walks in MuJoCo; at 0.75 s it
+  falls behind by 23° and the robot falls, and the clipped loop predicts both.
 
-Verdict: the most severe predicted event, in the order joint_limit, saturation,
-tip, strike, slip, foot_slide; ``stable`` when none.
+Verdict: the most severe predicted event of ``VERDICT_KINDS``, in the order
+joint_limit, tip, strike, slip, foot_slide; ``stable`` when none.
 """
 
 from __future__ import annotations
@@ -45,7 +50,8 @@ TIP_ANGLE = np.deg2rad(5.0)  # [rad]
 G = 9.81  # [m/s²]
 
 PREDICTED_KINDS = ("joint_limit", "saturation", "tip", "strike", "slip", "foot_slide")
-SEVERITY = {kind: len(PREDICTED_KINDS) - i for i, kind in enumerate(PREDICTED_KINDS)}
+VERDICT_KINDS = tuple(k for k in PREDICTED_KINDS if k != "saturation")
+SEVERITY = {kind: len(VERDICT_KINDS) - i for i, kind in enumerate(VERDICT_KINDS)}
 
 
 @dataclass(frozen=True)
@@ -64,8 +70,9 @@ class PredictedEvent:
 
 
 def verdict(events: list[PredictedEvent]) -> str:
-    """The most severe predicted event kind, or ``stable``."""
-    worst = max(events, key=lambda e: SEVERITY[e.kind], default=None)
+    """The most severe predicted event kind of ``VERDICT_KINDS``, or ``stable``."""
+    deciding = [e for e in events if e.kind in SEVERITY]
+    worst = max(deciding, key=lambda e: SEVERITY[e.kind], default=None)
     return "stable" if worst is None else worst.kind
 
 
@@ -214,12 +221,12 @@ class Prediction:
 
 
 def saturation_events(walk, force_limit: float) -> list[PredictedEvent]:
-    """``saturation`` where the servo must deliver more than its torque limit.
+    """``saturation`` where the loop asks a servo for more than its torque limit.
 
-    The loop torque of the reached walk (``CompliantWalk.loop_torque``: what the
-    joint needs, τ + A q̈ + d q̇, less nothing) beyond the servo's limit cannot be
-    delivered: the joint falls behind the plan from there on, by an amount no
-    stiffness bounds.
+    ``CompliantWalk.loop_torque`` is what the loop asks for (the static walk: what
+    the joint needs; the servo loop's walk: kp (−δ) − kv q̇ + τ_ff before clipping).
+    Beyond the limit the servo delivers the limit and the joint falls behind, which
+    ``servo_loop`` integrates; the event reports it and does not decide the verdict.
     """
     over = np.abs(walk.loop_torque) > force_limit
     if not over.any():
@@ -231,7 +238,7 @@ def saturation_events(walk, force_limit: float) -> list[PredictedEvent]:
         PredictedEvent(
             float(walk.plan.t[k]),
             "saturation",
-            f"{JOINT_NAMES[worst]} needs {peak[worst]:.2f} N m of a servo limited to "
+            f"{JOINT_NAMES[worst]} asks for {peak[worst]:.2f} N m of a servo limited to "
             f"{force_limit:g} N m (first {JOINT_NAMES[j]})",
         )
     ]
@@ -251,8 +258,10 @@ def predict(
     Args:
         plan: The planned walk (joint limits and foot slide are the plan's).
         friction: Coulomb μ of the feet on the plane.
-        walk: The compliance-aware walk (``compliance.CompliantWalk``) the servo makes;
-            tip, slip and strike are judged on it. None: on ``plan`` itself, no strike.
+        walk: The walk the servo makes (``compliance.CompliantWalk``: the static fixed
+            point, or ``servo_loop.servo_walk``, the loop through time); tip, slip,
+            strike and saturation are judged on it. None: on ``plan`` itself, neither
+            strike nor saturation.
         stiffness: The servo's kp [N m/rad], with ``walk``.
         force_limit: The servo's torque limit [N m], with ``walk``.
         floor_stiffness: Sole-corner stiffness of the simulator's soft floor [N/m]
@@ -274,8 +283,8 @@ def predict(
                 PredictedEvent(
                     0.0,
                     "strike",
-                    "no pose where the servos hold the planned torques "
-                    "(the compliance fixed point does not converge)",
+                    "the servos cannot hold the walk (the compliance fixed point does "
+                    "not converge, or the loop's sway leaves the plan by pi)",
                 )
             )
         else:

@@ -417,10 +417,10 @@ def confusion(rows) -> str:
 def _predicted_confusion(rows) -> list[str]:
     """The predicted verdict (most severe predicted event) × simulated, and its disagreements."""
     from bench.report.fidelity import confusion_table, disagreement_cause
-    from planner.verdict import PREDICTED_KINDS
+    from planner.verdict import VERDICT_KINDS
 
     lines = ["", "# Predicted vs simulated verdicts", ""]
-    lines += confusion_table(rows, "predicted_verdict", ("stable", *PREDICTED_KINDS))
+    lines += confusion_table(rows, "predicted_verdict", ("stable", *VERDICT_KINDS))
     lines += ["", "## Disagreements", ""]
     for r in rows:
         if (r["predicted_verdict"] == "stable") != (r["simulated_verdict"] == "stable"):

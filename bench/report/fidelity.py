@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import SlopewalkError
-from planner.verdict import LOADED_FRACTION, PREDICTED_KINDS, SLIP_DISTANCE, TIP_ANGLE
+from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
 
 VERDICTS = ("paper", "compliant", "predicted")
 _COLUMN = {
@@ -96,7 +96,7 @@ def _table_section(name: str, rows: list[dict]) -> list[str]:
     lines += ["", "### Paper's verdict × simulated", ""]
     lines += confusion_table(rows, "analytic_verdict", ("stable", "zmp_outside"))
     lines += ["", "### Predicted verdict × simulated", ""]
-    lines += confusion_table(rows, "predicted_verdict", ("stable", *PREDICTED_KINDS))
+    lines += confusion_table(rows, "predicted_verdict", ("stable", *VERDICT_KINDS))
     lines += _goals(rows)
     wrong = [r for r in rows if _walks(r["predicted_verdict"]) != _walks(r["simulated_verdict"])]
     lines += ["", f"### Disagreements of the predicted verdict ({len(wrong)})", ""]
@@ -207,54 +207,23 @@ def disagreement_cause(r) -> str:
     rotation = f"predicted support tilt {r['predicted_rotation_deg']:.2f}°"
     cause = f"**{cause_class(r)}**: "
     if _walks(r["predicted_verdict"]):
-        line = f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
-        return cause + line + (servo_loop_figures(r) if cause_class(r) == "servo sway" else "")
-    line = (
+        return cause + f"predicted stable, {sim}; {plan}; {rotation}; {tracking}; {support}"
+    return cause + (
         f"predicted {r['predicted_verdict']} ({_events(r['predicted_events'])}; {rotation}), "
         f"yet the robot walked ({_events(r['events'])}); {plan}; {tracking}; {support}"
-    )
-    return cause + line + (servo_loop_figures(r) if cause_class(r) == "survived saturation" else "")
-
-
-def servo_loop_figures(r) -> str:
-    """The servo loop's dynamics on a row's walk (``planner.servo_loop``), as a clause.
-
-    Re-plans the row (default robot, no mass scaling; else "") and integrates the
-    servo loop along it (its output clipped at the torque limit): the walk's margin and
-    the support tilt predicted on it, saturation acting only through what it does.
-    """
-    if r.get("robot") != "default" or (r.get("mass_scale") or "none") != "none":
-        return ""
-    from bench.sim.prediction import servo_loop_prediction
-    from planner.plan import plan_walk
-    from planner.spec import load_spec
-    from planner.trajectory import GaitParams
-
-    spec = load_spec()
-    gait = GaitParams.nominal(
-        spec, r["step_time"], slope=float(np.deg2rad(r["slope_deg"])), steps=int(r["steps"])
-    )
-    walk, prediction = servo_loop_prediction(
-        plan_walk(spec, gait), friction=r["friction"], actuators=r["actuators"]
-    )
-    return (
-        f"; with the servo loop's dynamics (`planner/servo_loop.py`) the walk's margin is "
-        f"{walk.plan.margin.min() * 1e3:.1f} mm and the predicted support tilt "
-        f"{np.rad2deg(prediction.rotation.max()):.2f}° ({prediction.verdict})"
     )
 
 
 def cause_class(r) -> str:
     """Which measured mechanism a disagreement belongs to (results/README.md measures each).
 
-    * servo sway: plain ``servo``, predicted stable: the quasi-static compliance pass
-      holds (its margin stays positive) while the simulated servo sways and tips;
+    * servo sway: plain ``servo``, predicted stable, the quasi-static compliance pass
+      keeping a positive margin: the servo loop's sway (``planner/servo_loop.py``)
+      left too small by the model, while the simulated servo sways and tips;
     * rocking short of the tip angle: predicted stable, yet the predicted rocking
       turns the support by more than a fifth of the tip angle (it is there, only
       smaller than the simulator's): a landing's impact turning pitch into roll, which
       the two-axis rocking keeps apart (results/README.md);
-    * survived saturation: a servo asked for more than its limit, which the
-      simulation reports too (``torque_limit``), and the robot still walked;
     * unexplained: none of these.
     """
     walks = _walks(r["predicted_verdict"])
@@ -262,8 +231,6 @@ def cause_class(r) -> str:
         return "servo sway"
     if walks and r["predicted_rotation_deg"] > np.rad2deg(TIP_ANGLE) / 5:
         return "rocking short of the tip angle"
-    if not walks and r["predicted_verdict"] == "saturation" and "torque_limit" in str(r["events"]):
-        return "survived saturation"
     return "unexplained"
 
 

@@ -8,7 +8,10 @@ Three predictions sit side by side (``TrialPrediction``):
   actually makes under the planned torques (``planner.compliance``), with its own
   ZMP trace and margin;
 * the predicted verdict: the most severe event ``planner.verdict.predict`` finds on
-  that walk (joint_limit, saturation, tip, strike, slip, foot_slide), or ``stable``.
+  the walk the servo loop makes through time (``planner.servo_loop``: its sway, the
+  closed chain of double support, the output clipped at the torque limit):
+  joint_limit, tip, strike, slip, foot_slide, or ``stable``; ``saturation`` (the loop
+  asking for more than its limit, on the static walk) is reported beside them.
 
 The servo is the trial's actuator mode (``model.servo_settings``), and in a
 feedforward mode the loop is fed the same clipped torque as in the simulation
@@ -41,12 +44,15 @@ class TrialPrediction:
         compliant_verdict: "stable" or "zmp_outside" (the ZMP of the walk the servo makes).
         walk: The compliance-aware walk; ``walk.plan.zmp`` its ZMP trace [m], (n, 2).
         prediction: Predicted events and the verdict they imply.
+        loop_walk: The walk the servo loop makes (``servo_loop.servo_walk``), which
+            ``prediction`` judges.
     """
 
     paper_verdict: str
     compliant_verdict: str
     walk: CompliantWalk
     prediction: Prediction
+    loop_walk: CompliantWalk
 
     @property
     def verdict(self) -> str:
@@ -56,21 +62,22 @@ class TrialPrediction:
 def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPrediction:
     """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ."""
     servo = servo_settings(plan.spec, actuators)
-    walk = compliant_walk(
-        plan,
+    loop = dict(
         stiffness=servo.kp,
         velocity_gain=servo.kv,
         damping=servo.damping,
         armature=servo.armature,
         feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
     )
+    walk = compliant_walk(plan, **loop)
+    loop_walk = servo_walk(plan, force_limit=servo.force_limit, **loop)
     scene = mujoco.MjModel.from_xml_string(
         scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
     )
     prediction = predict(
         plan,
         friction=friction,
-        walk=walk,
+        walk=loop_walk,
         stiffness=servo.kp,
         force_limit=servo.force_limit,
         floor_stiffness=scene_corner_stiffness(scene),
@@ -80,37 +87,5 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         compliant_verdict="stable" if walk.converged and walk.plan.stable else "zmp_outside",
         walk=walk,
         prediction=prediction,
+        loop_walk=loop_walk,
     )
-
-
-def servo_loop_prediction(
-    plan: Plan, *, friction: float, actuators: str
-) -> tuple[CompliantWalk, Prediction]:
-    """The servo loop's dynamics (``planner.servo_loop``) on ``plan``, and what it predicts.
-
-    A diagnostic beside ``predict_trial``: the walk the loop makes integrated through
-    time (its sway about the static fixed point, the output clipped at the torque
-    limit), and the events ``predict`` finds on it. Saturation is left to the clipped
-    walk's own consequences (no ``saturation`` event).
-    """
-    servo = servo_settings(plan.spec, actuators)
-    walk = servo_walk(
-        plan,
-        stiffness=servo.kp,
-        velocity_gain=servo.kv,
-        damping=servo.damping,
-        armature=servo.armature,
-        force_limit=servo.force_limit,
-        feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
-    )
-    scene = mujoco.MjModel.from_xml_string(
-        scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
-    )
-    prediction = predict(
-        plan,
-        friction=friction,
-        walk=walk,
-        stiffness=servo.kp,
-        floor_stiffness=scene_corner_stiffness(scene),
-    )
-    return walk, prediction

@@ -83,6 +83,9 @@ def test_verdict_is_the_most_severe_event():
     assert verdict([e("foot_slide"), e("slip")]) == "slip"
     assert verdict([e("slip"), e("tip"), e("strike")]) == "tip"
     assert verdict([e("tip"), e("joint_limit")]) == "joint_limit"
+    # saturation is reported, like the simulator's torque_limit, and decides nothing
+    assert verdict([e("saturation")]) == "stable"
+    assert verdict([e("saturation"), e("foot_slide")]) == "foot_slide"
 
 
 def test_a_sagging_servo_strikes_the_plane(spec):
@@ -112,5 +115,5 @@ def test_saturation_names_the_first_sample_and_the_neediest_joint(spec, plan):
     (event,) = saturation_events(walk, limit)
     assert event.kind == "saturation"
     assert event.time == pytest.approx(plan.t[first])
-    assert event.cause.startswith(f"{JOINT_NAMES[neediest]} needs {peak[neediest]:.2f} N m")
+    assert event.cause.startswith(f"{JOINT_NAMES[neediest]} asks for {peak[neediest]:.2f} N m")
     assert saturation_events(walk, 1.01 * peak.max()) == []
