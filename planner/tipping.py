@@ -65,8 +65,8 @@ plan's time base); a rotation past ``FALLEN`` is reported as that.
 
 Not modelled: a slanted edge of the double-support hull (a rotation about it is
 both axes at once; the extreme lines are the sole edges of feet parallel to x),
-and the servos' tracking lag (the compliance pass, ``compliance.py``, is
-quasi-static).
+and the servos' deflection while the support turns (the walk judged is given:
+``servo_loop`` integrates the loop's sway along the plan, the support held flat).
 
 I_e = Σ_k m_k d_k² + ê·I_k ê over the 9 links, d_k the distance of link k's
 CoM from the line and I_k its inertia about its CoM, both in S.

@@ -25,9 +25,11 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
   Like that event it is reported and does not decide the verdict: the limit is
   physical, and what it does is in the walk judged (``servo_loop``: the clipped
-  loop, the joint falling behind). Measured: ``servo_ff`` at 1 s steps asks the
-  swing knee for 2.06 N m of 1.5 for 0.45 s and walks in MuJoCo; at 0.75 s it
-  falls behind by 23° and the robot falls, and the clipped loop predicts both.
+  loop, the joint falling behind). Measured: ``servo_ff`` at 1 s steps on 0–10°
+  asks the swing knee for about 2.1 N m of 1.5, and MuJoCo's robot walks with
+  ``torque_limit`` events; the clipped loop lags there by 5.5° at most and walks.
+  At 0.75 s the knee lags by 24°, the sole strikes the plane and the robot tips,
+  as MuJoCo's falls.
 
 Verdict: the most severe predicted event of ``VERDICT_KINDS``, in the order
 joint_limit, tip, strike, slip, foot_slide; ``stable`` when none.
