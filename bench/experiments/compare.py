@@ -39,7 +39,7 @@ def run_comparison(spec: RobotSpec) -> list[dict]:
     rows = []
     for name, step_time, slope_deg in CASES:
         gait = GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope_deg))
-        result = run_trial(spec, TrialSpec(gait))
+        result = run_trial(spec, TrialSpec(gait), predict=False)  # simulated columns only
         rows.append(
             {
                 "case": name,

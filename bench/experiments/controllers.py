@@ -26,7 +26,8 @@ def play(job) -> dict:
     No timing: the table is the same bytes every time it is regenerated.
     """
     trial, controller = job
-    result = run_trial(trial.spec, dataclasses.replace(trial.trial_spec(), controller=controller))
+    trial_spec = dataclasses.replace(trial.trial_spec(), controller=controller)
+    result = run_trial(trial.spec, trial_spec, predict=False)  # simulated columns only
     lost = [e for e in result.events if e.kind != "torque_limit"]
     return {
         "verdict": result.simulated_verdict,

@@ -480,7 +480,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
                 timestep=TIMESTEP,
                 controller=controller,
             )
-            result = run_trial(cell.spec, trial, plan=plan)
+            result = run_trial(cell.spec, trial, plan=plan, predict=False)  # simulated columns
             tag = controller_tag(controller) if controller else ""
             verdict, rms = sim_columns(gait, mode, tag)
             out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}

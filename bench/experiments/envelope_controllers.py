@@ -199,7 +199,8 @@ def play_gait(job_and_controllers) -> dict:
                 params, friction=job.friction, actuators=mode, timestep=TIMESTEP,
                 controller=controller,
             )  # fmt: skip
-            out[mode, controller] = run_trial(job.spec, trial, plan=plan).simulated_verdict
+            result = run_trial(job.spec, trial, plan=plan, predict=False)  # simulated only
+            out[mode, controller] = result.simulated_verdict
     return out
 
 

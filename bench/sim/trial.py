@@ -142,7 +142,12 @@ class TrialResult:
         out = json.loads(json.dumps(out, default=float), parse_constant=lambda _: None)
         missing = [k for k, v in out.items() if v is None]
         if missing:
-            out["null_because"] = {k: self.why_missing() for k in missing}
+            out["null_because"] = {
+                k: "not predicted: compared with predict=False"
+                if self.predicted_verdict == NOT_PREDICTED and k in _PREDICTED_FIELDS
+                else self.why_missing()
+                for k in missing
+            }
         return out
 
     @property
@@ -221,12 +226,15 @@ def run_trial(
     *,
     plan: Plan | None = None,
     recording: Recording | None = None,
+    predict: bool = True,
 ) -> TrialResult:
     """Plan (unless given), simulate (unless given) and compare one trial.
 
     Open loop (``trial.controller`` None) the plan is one ``mujoco.rollout``; with a
     controller, ``closed_loop.play_controller`` steps ``env.TrialEnv`` through the
     whole trial; either way the same ``Recording`` goes through the same comparison.
+    ``predict`` False leaves out the analytic predictions beyond the paper's verdict
+    (``compare``), which cost most of a trial's time (the servo loop's walk).
     """
     start = time.perf_counter()
     plan = plan or plan_walk(spec, trial.gait)
@@ -237,11 +245,20 @@ def run_trial(
     recording = recording or play(
         plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
     )
-    return compare(plan, trial, recording, wall_s=time.perf_counter() - start)
+    return compare(plan, trial, recording, wall_s=time.perf_counter() - start, predict=predict)
 
 
-def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float) -> TrialResult:
-    """Put prediction and simulation side by side (see module doc)."""
+NOT_PREDICTED = "not_predicted"  # the verdict columns of a trial compared with predict=False
+
+
+def compare(
+    plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float, predict: bool = True
+) -> TrialResult:
+    """Put prediction and simulation side by side (see module doc).
+
+    With ``predict`` False the compliant and predicted verdicts read ``NOT_PREDICTED``,
+    their margin and rotation NaN, and the series have no ``*_compliant`` entries.
+    """
     weight = plan.spec.total_mass * G
     events = detect(recording, weight=weight, hip_height=plan.params.hip_height)
     s, t = recording.sensors, recording.t
@@ -261,7 +278,9 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
     idx = np.clip(np.searchsorted(plan.t, tw), 0, plan.t.size - 1)
     polygon = plan.polygon[idx]
     sim_margin = signed_margin(np.nan_to_num(cop), polygon)[standing]
-    predicted = predict_trial(plan, friction=trial.friction, actuators=trial.actuators)
+    predicted = (
+        predict_trial(plan, friction=trial.friction, actuators=trial.actuators) if predict else None
+    )
     rows = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(lost, default=np.inf))
     support = support_difference(plan, recording, rows)
     q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
@@ -295,11 +314,7 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
         peak_torque_simulated=float(np.abs(s.actuator_force[walk]).max()),
         wall_s=wall_s,
         sim_steps=int(t.size),
-        compliant_verdict=predicted.compliant_verdict,
-        compliant_min_margin=float(np.min(predicted.walk.plan.margin)),
-        predicted_verdict=predicted.verdict,
-        predicted_events=predicted.prediction.events,
-        predicted_rotation=float(np.max(predicted.prediction.rotation, initial=0.0)),
+        **_predicted_columns(predicted),
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         series={
@@ -313,14 +328,41 @@ def compare(plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float
             "q_simulated": s.q[walk],
             "standing": standing,
             "margin_analytic": on_walk(plan.margin)[:, 0],
-            "zmp_compliant": on_walk(predicted.walk.plan.zmp),
-            "margin_compliant": on_walk(predicted.walk.plan.margin)[:, 0],
+            **(
+                {
+                    "zmp_compliant": on_walk(predicted.walk.plan.zmp),
+                    "margin_compliant": on_walk(predicted.walk.plan.margin)[:, 0],
+                }
+                if predicted
+                else {}
+            ),
             "actuator_force": s.actuator_force[walk],
             "sole": s.sole[walk],
             "pelvis_height": s.pelvis_height[walk],
             "qpos": np.column_stack([s.pelvis_qpos, s.q])[walk],
         },
     )
+
+
+_PREDICTED_FIELDS = ("compliant_min_margin", "predicted_rotation")  # NaN when not predicted
+
+
+def _predicted_columns(predicted) -> dict:
+    """``TrialResult``'s prediction fields of a ``TrialPrediction``, or of none."""
+    if predicted is None:
+        return {
+            "compliant_verdict": NOT_PREDICTED,
+            "compliant_min_margin": float("nan"),
+            "predicted_verdict": NOT_PREDICTED,
+            "predicted_rotation": float("nan"),
+        }
+    return {
+        "compliant_verdict": predicted.compliant_verdict,
+        "compliant_min_margin": float(np.min(predicted.walk.plan.margin)),
+        "predicted_verdict": predicted.verdict,
+        "predicted_events": predicted.prediction.events,
+        "predicted_rotation": float(np.max(predicted.prediction.rotation, initial=0.0)),
+    }
 
 
 def _rms(x: np.ndarray) -> float:

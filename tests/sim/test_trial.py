@@ -11,7 +11,7 @@ from mujoco import rollout
 
 from bench.sim.events import detect, verdict
 from bench.sim.playback import build_model, control_sequence, initial_state, recording_from_rollout
-from bench.sim.trial import TrialSpec, run_trial
+from bench.sim.trial import NOT_PREDICTED, TrialSpec, run_trial
 from planner.kinematics import rotation_slope_to_world
 from planner.plan import plan_walk
 from planner.spec import default_spec_path
@@ -76,6 +76,23 @@ def test_fast_walk_falls_where_the_plan_leaves_the_foot(spec):
     result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 0.4)))
     assert result.analytic_verdict == "zmp_outside"
     assert result.simulated_verdict in ("tip", "fall")
+
+
+def test_a_trial_without_predictions_simulates_the_same_and_claims_no_verdict(spec):
+    """``predict=False`` (the envelope's and the controller tables' trials) skips the
+    servo loop's walk: the simulated columns stay those of the full comparison, and the
+    prediction columns say that nothing was predicted rather than "stable"."""
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
+    full = run_trial(spec, TrialSpec(plan.params), plan=plan).scalars()
+    bare = run_trial(spec, TrialSpec(plan.params), plan=plan, predict=False).scalars()
+    predicted = {"compliant_verdict", "compliant_min_margin", "predicted_verdict",
+                 "predicted_events", "predicted_rotation", "wall_s", "null_because"}  # fmt: skip
+    assert {k: v for k, v in bare.items() if k not in predicted} == {
+        k: v for k, v in full.items() if k not in predicted
+    }
+    assert bare["predicted_verdict"] == bare["compliant_verdict"] == NOT_PREDICTED
+    assert bare["predicted_events"] == [] and bare["predicted_rotation"] is None
+    assert bare["null_because"]["predicted_rotation"].startswith("not predicted")
 
 
 def test_a_blow_up_is_reported_not_raised(spec, tmp_path, monkeypatch):
