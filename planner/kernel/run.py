@@ -62,63 +62,54 @@ def _footprints(landing, x, hip_width):
     return y
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def _run_end(pieces, j, stop):
-    """End of the run of samples from j (< stop) on one piece, at most ``BLOCK`` long."""
-    e = j + 1
-    while e < stop and pieces[e] == pieces[j] and e - j < sm.BLOCK:
-        e += 1
-    return e
-
-
 @njit(cache=True, parallel=True, error_model="numpy")
-def series(pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, pieces, times):
+def series(
+    pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, inputs, index, count,
+    size, double, n,
+):  # fmt: skip
     """Rows of every sample for every individual, shape (P, n, ROW).
 
-    The work is split into (individual, block of samples) tasks, so one long plan
-    uses every thread too.
+    The samples are the blocks of a ``tables.Blocks`` of n samples. The work is split
+    into (individual, run of blocks) tasks, so one long plan uses every thread too.
     """
-    P, n = X.shape[0], times.size
+    P, nb = X.shape[0], count.size
     out = np.empty((P, n, sm.ROW))
-    blocks = max(1, min(n // SERIES_BLOCK, 64 // P))
-    size = -(-n // blocks)
-    for task in prange(P * blocks):
-        p, b = task // blocks, task % blocks
+    parts = max(1, min(nb * sm.BLOCK // SERIES_BLOCK, 64 // P))
+    per = -(-nb // parts)
+    for task in prange(P * parts):
+        p, part = task // parts, task % parts
         w = sm.scratch()
         x = X[p]
         y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
-        j, stop = b * size, min(n, (b + 1) * size)
-        while j < stop:
-            e = _run_end(pieces, j, stop)
-            piece = pieces[j]
+        for b in range(part * per, min(nb, (part + 1) * per)):
             sm.evaluate_block(
-                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece,
-                times, j, e - j, w,
+                inputs, b, size[b], double[b], y, geometry, dh_a, d5, mass, com, inertia,
+                gravity, x, w,
             )  # fmt: skip
-            xs = x[tb.STEP_LENGTH] * pf[piece, tb.STANCE_X]
-            sm.write_rows(mass, gravity, xs, y[pi[piece, tb.FOOT]], e - j, w, out[p, j:e])
-            j = e
+            sm.write_rows(mass, gravity, count[b], w, out[p], index[b])
     return out
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _margin_at(args, x, y, piece, t, probe, scratch):
+def _margin_at(args, x, y, piece, t, scratch):
     """Signed ZMP margin [m] of individual x at time t [s] of ``piece`` (one-sample block).
 
-    The block's start and length are computed (0 and 1), not written as literals: a
-    literal argument would compile another version of the whole pipeline.
+    The block's length is computed (1), not written as a literal, and the support kind
+    is an int as in a ``Blocks``: other argument types would compile another version of
+    the whole pipeline.
     """
     pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity = args
-    probe[0] = t
-    sm.evaluate_block(
-        pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, probe, probe.size - 1,
-        probe.size, scratch,
+    sm.load_sample(pf, pi, piece, t, 0, scratch)
+    one = 1 + 0 * piece
+    sm.evaluate_loaded(
+        one, 1 - pi[piece, tb.SSP], y, geometry, dh_a, d5, mass, com, inertia, gravity, x,
+        scratch,
     )  # fmt: skip
     return sm.margin(scratch, 0)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, probe, scratch):
+def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, scratch):
     """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search).
 
     Returns (margin [m], samples evaluated).
@@ -135,7 +126,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, probe, scratch):
         if not (a < u < c) or abs(u - b) < 0.5 * REFINE_TOL:  # golden step into the larger side
             u = b + 0.381966 * (c - b) if (c - b) > (b - a) else b - 0.381966 * (b - a)
         piece = pa if u <= t1a else pc
-        fu = _margin_at(args, x, y, piece, u, probe, scratch)
+        fu = _margin_at(args, x, y, piece, u, scratch)
         moved = abs(u - b)
         if fu < fb:
             if u < b:
@@ -154,7 +145,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, probe, scratch):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _refine_all(args, x, y, pieces, times, margin, low, probe, scratch):
+def _refine_all(args, x, y, pieces, times, margin, low, scratch):
     """Smallest margin [m] found by refining the local minima of the sampled ``margin``.
 
     ``low`` is the smallest sampled margin [m], where the search starts from.
@@ -193,7 +184,7 @@ def _refine_all(args, x, y, pieces, times, margin, low, probe, scratch):
             continue
         found = _refine(
             args, x, y, pieces[j - 1], times[j - 1], margin[j - 1], pieces[j], times[j],
-            margin[j], pieces[j + 1], times[j + 1], margin[j + 1], probe, scratch,
+            margin[j], pieces[j + 1], times[j + 1], margin[j + 1], scratch,
         )  # fmt: skip
         low, evaluated = min(low, found[0]), evaluated + found[1]
     return low, evaluated
@@ -202,22 +193,23 @@ def _refine_all(args, x, y, pieces, times, margin, low, probe, scratch):
 @njit(cache=True, parallel=True, error_model="numpy")
 def scores(
     pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, limits, X, pieces, times,
-    refine,
+    inputs, index, count, size, double, refine,
 ):  # fmt: skip
     """Work [J], minimum margin [m], joint gap [rad], samples evaluated, each shape (P,).
 
+    The samples: (pieces, times) in time order, in blocks (``tables.Blocks``: inputs,
+    index, count, size, double).
     ``limits``: (lower, upper) [rad] of each Table-I joint, shape (8, 2); the gap is the
     worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples,
     from the extremes of tan(q/2) (``sample``: increasing in q on (−π, π)).
     Unreachable individuals get work = inf, margin = −inf, gap = inf.
     """
-    P, n = X.shape[0], times.size
+    P, n, nb = X.shape[0], times.size, count.size
     work_out, margin_out, gap_out = np.empty(P), np.empty(P), np.empty(P)
     count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
     for p in prange(P):
         scratch = sm.scratch()
-        probe = np.empty(1)
         margin = np.empty(n)
         power = np.empty(n)
         high = np.full(6, -np.inf)  # extremes of tan(q/2) of q2..q7
@@ -225,26 +217,26 @@ def scores(
         x = X[p]
         y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
         bad = False
-        j = 0
-        while j < n:
-            e = _run_end(pieces, j, n)
+        done = 0
+        for b in range(nb):
             sm.evaluate_block(
-                pf, pi, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, pieces[j],
-                times, j, e - j, scratch,
+                inputs, b, size[b], double[b], y, geometry, dh_a, d5, mass, com, inertia,
+                gravity, x, scratch,
             )  # fmt: skip
-            for k in range(e - j):
-                margin[j + k] = sm.margin(scratch, k)
-                power[j + k] = sm.power(scratch, k)
-                bad = bad or np.isnan(margin[j + k]) or np.isnan(power[j + k])
+            m = count[b]
+            for k in range(m):
+                margin[index[b, k]] = sm.margin(scratch, k)
+                power[index[b, k]] = sm.power(scratch, k)
+                bad = bad or np.isnan(sm.margin(scratch, k)) or np.isnan(sm.power(scratch, k))
             for i in range(6):
-                for k in range(e - j):
+                for k in range(m):
                     h = sm.half_angle(scratch, i, k)
                     high[i] = max(high[i], h)
                     low_h[i] = min(low_h[i], h)
+            done += m
             if bad:  # out of reach: no need to go on
-                count_out[p] = e
+                count_out[p] = done
                 break
-            j = e
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
@@ -259,7 +251,7 @@ def scores(
             if j:
                 total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if refine:
-            low, extra = _refine_all(args, x, y, pieces, times, margin, low, probe, scratch)
+            low, extra = _refine_all(args, x, y, pieces, times, margin, low, scratch)
             count_out[p] += extra
         work_out[p], margin_out[p], gap_out[p] = total, low, gap
     return work_out, margin_out, gap_out, count_out
@@ -275,6 +267,7 @@ class KernelWalk:
         limits: Joint limits per Table-I joint [rad], (8, 2).
         grid: (pieces, t) of ``timeline.t`` (the plan's samples).
         limit: (pieces, t) of the grid plus one-sided limits at every piece end (the GA's).
+        grid_blocks, limit_blocks: Those samples in blocks (``tables.Blocks``).
     """
 
     timeline: Timeline
@@ -283,18 +276,23 @@ class KernelWalk:
     limits: np.ndarray
     grid: tuple[np.ndarray, np.ndarray]
     limit: tuple[np.ndarray, np.ndarray]
+    grid_blocks: tb.Blocks
+    limit_blocks: tb.Blocks
 
     @classmethod
     def of(cls, spec: RobotSpec, timeline: Timeline) -> KernelWalk:
         gait = tb.GaitTable.of(timeline)
         limits = np.array([spec.joint_limits[kind] for kind in JOINT_KINDS], dtype=float)
+        grid, limit = tb.grid_samples(gait, timeline), tb.limit_samples(gait, timeline)
         return cls(
             timeline,
             gait,
             tb.ChainTable.of(spec),
             limits,
-            tb.grid_samples(gait, timeline),
-            tb.limit_samples(gait, timeline),
+            grid,
+            limit,
+            tb.Blocks.of(gait, *grid),
+            tb.Blocks.of(gait, *limit),
         )
 
     def _args(self, slope: float):
@@ -312,7 +310,7 @@ class KernelWalk:
         """
         X = self.gait.individuals(X)
         with _LAUNCH:
-            return series(*self._args(slope), X, *self.grid)
+            return series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
 
     def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False):
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
@@ -325,9 +323,16 @@ class KernelWalk:
         """
         X = self.gait.individuals(X)
         pieces, times = self.limit if samples == "limit" else self.grid
+        blocks = self.limit_blocks if samples == "limit" else self.grid_blocks
         with _LAUNCH:
-            out = scores(*self._args(slope), self.limits, X, pieces, times, refine)
+            out = scores(
+                *self._args(slope), self.limits, X, pieces, times, *_fields(blocks), refine
+            )  # fmt: skip
         return out if counts else out[:3]
+
+
+def _fields(blocks: tb.Blocks) -> tuple:
+    return blocks.inputs, blocks.index, blocks.count, blocks.size, blocks.double
 
 
 _WALKS: dict = {}

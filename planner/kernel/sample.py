@@ -1,8 +1,9 @@
 """Blocks of samples of the analytic pipeline, compiled: gait, IK, FK, Newton-Euler, ZMP, margin.
 
 ``evaluate_block`` computes, for one individual (``tables.COLUMNS``) at up to
-``BLOCK`` times of one gait piece (``tables.GaitTable``), what ``plan.Plan`` holds
-at those instants. The samples are the innermost loop of every stage and every
+``BLOCK`` samples of one support kind (``tables.Blocks``: each sample carries its
+time and its gait piece's coefficients, so a block takes samples of several pieces
+and steps, and is full), what ``plan.Plan`` holds at those instants. The samples are the innermost loop of every stage and every
 stage is one branch-free loop over them, with the chain's known structure (the
 DH twists 0, ∓π/2, the one non-zero offset d5) hoisted out of it, so the loops
 vectorise (SIMD over samples). Quantities live in structure-of-arrays scratch
@@ -36,7 +37,13 @@ since a row's distance from the next is then at least the trip count: without th
 bound the compiler must assume the rows may overlap and leaves the loops scalar.
 Measured per sample on one core (SSP block of 64, numba 0.61, AVX-512):
 gait and IK 20 ns (of which sin/cos of λ ~9 ns: libm does not vectorise), FK 9 ns,
-then the recursions.
+then the recursions. A block's cost is far from proportional to its samples: the
+samples past the last multiple of 8 run scalar (~400-900 ns each), and each stage
+has a fixed cost, so (Zen 5, numba 0.68) a block of 64 costs 73 ns per sample, one of
+33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43 (its DSPs) 113:
+hence full blocks of several pieces, padded to a multiple of 8. A larger block does
+not help (128: 79 ns, the scratch outgrows the caches), a smaller one neither (32:
+92 ns).
 """
 
 from __future__ import annotations
@@ -60,7 +67,7 @@ POWER_JOINTS = 78  # (8,) |τ_i θ̇_i| [W]
 LEG_DISTANCE = 86  # (2,) hip-ankle distance of the stance and swing legs [m]
 ROW = 88
 
-BLOCK = 64  # samples per block at most
+BLOCK = tb.BLOCK  # samples per block at most
 B = BLOCK  # one row of the scratch
 
 # Scalar rows (offsets into the scratch; n consecutive rows are n·B apart)
@@ -84,7 +91,10 @@ _VERT = 88 * B  # polygon vertices x0, y0, x1, … (16)
 _TAURAW = 104 * B  # m · u of each joint before the swing split (9: row 0 unused)
 _TAU = 113 * B  # joint torques (8)
 _SEG = 121 * B  # smallest squared distance of the ZMP to a polygon edge
-_SCALARS = 122 * B
+_XS, _YS = 122 * B, 123 * B  # the stance sole's x and y
+_IN = 124 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
+_SIDE = _IN + tb.IN_SIDE * B  # stance side, 0.0 left / 1.0 right
+_SCALARS = _IN + tb.INPUTS * B
 # Frames 0..8 from _FR, FRAME rows each: 3 r + c is R[r, c] (column c the frame's axis
 # x, y, z; row r its S component), 9..11 the origin.
 FRAME = 12 * B
@@ -113,9 +123,20 @@ def scratch():
 
 
 @njit(**_KW)
-def _cubic(pf, piece, col, tau):
-    """Value and first two τ-derivatives of c0 + c1 τ + c2 τ² + c3 τ³ (pf[piece, col:col+4])."""
-    c0, c1, c2, c3 = pf[piece, col], pf[piece, col + 1], pf[piece, col + 2], pf[piece, col + 3]
+def load_sample(pf, pi, piece, t, j, w):
+    """The inputs of sample j of the scratch: time t [s] on ``piece`` (``tables.Blocks``)."""
+    for c in range(tb.PIECE_FLOATS):
+        w[_IN + c * B + j] = pf[piece, c]
+    w[_IN + tb.IN_T * B + j] = t
+    w[_IN + tb.IN_SIDE * B + j] = pi[piece, tb.SIDE]
+    w[_IN + tb.IN_FOOT * B + j] = pi[piece, tb.FOOT]
+
+
+@njit(**_KW)
+def _cubic(w, col, j, tau):
+    """Value and first two τ-derivatives of c0 + c1 τ + c2 τ² + c3 τ³ (input rows col..col+3)."""
+    r = _IN + col * B + j
+    c0, c1, c2, c3 = w[r], w[r + B], w[r + 2 * B], w[r + 3 * B]
     p = c0 + tau * (c1 + tau * (c2 + tau * c3))
     v = c1 + tau * (2.0 * c2 + 3.0 * tau * c3)
     a = 2.0 * c2 + 6.0 * tau * c3
@@ -160,33 +181,41 @@ def _leg(up, uv, ua, wq, wv, wa, l1, l2):
 
 
 @njit(**_KW)
-def _gait_ik(pf, piece, x, geometry, times, start, n, w):
-    """Gait in closed form and the IK of both legs: rates, DH cos/sin, tan(q/2), λ, share."""
+def _gait_ik(x, y, geometry, n, w):
+    """Gait in closed form and the IK of both legs: rates, DH cos/sin, tan(q/2), λ, share.
+
+    Also the stance sole's position (``_XS``, ``_YS``) from the individual's footprints
+    y [m] (``run._footprints``).
+    """
     n = min(n, B)  # a bound on the trip count (module doc)
-    t0 = pf[piece, tb.T0]
     l1, l2 = geometry[tb.SHANK], geometry[tb.THIGH]
     lh, lan = geometry[tb.HIP_WIDTH], geometry[tb.ANKLE_HEIGHT]
     hz, lift, tilt = x[tb.HZ], x[tb.LIFT_X], x[tb.TILT_X]
     step, sway, pelvis = x[tb.STEP_LENGTH], x[tb.SWAY_SHARE], x[tb.PELVIS]
-    k_hip = 0.5 * pf[piece, tb.TOWARDS] * lh  # the pelvis centre's lateral lever
-    k_sole = pf[piece, tb.TOWARDS] * lh  # the swing sole's
+    t_row, t0_row = _IN + tb.IN_T * B, _IN + tb.T0 * B
+    for j in range(n):  # a gather: a loop of its own
+        w[_YS + j] = y[int(w[_IN + tb.IN_FOOT * B + j])]
     for j in range(n):
-        tau = times[start + j] - t0
-        mp, mv, ma = _cubic(pf, piece, tb.TILT, tau)
-        wp, wv, wa = _cubic(pf, piece, tb.SWAY, tau)
+        tau = w[t_row + j] - w[t0_row + j]
+        mp, mv, ma = _cubic(w, tb.TILT, j, tau)
+        wp, wv, wa = _cubic(w, tb.SWAY, j, tau)
         w[_LAM + j] = tilt * (mp + sway * (wp - mp))
+        w[_XS + j] = step * w[_IN + tb.STANCE_X * B + j]
     # sin and cos of λ: a scalar loop of its own (libm calls do not vectorise)
     for j in range(n):
         w[_ST + j] = np.sin(w[_LAM + j])
         w[_CT + j] = np.cos(w[_LAM + j])
     for j in range(n):
-        tau = times[start + j] - t0
-        hxp, hxv, hxa = _cubic(pf, piece, tb.HIP_X, tau)
-        sxp, sxv, sxa = _cubic(pf, piece, tb.SWING_X, tau)
-        lp, lv, la = _cubic(pf, piece, tb.LIFT, tau)
-        mp, mv, ma = _cubic(pf, piece, tb.TILT, tau)
-        wp, wv, wa = _cubic(pf, piece, tb.SWAY, tau)
-        w[_SHARE + j] = _cubic(pf, piece, tb.SHARE, tau)[0]
+        tau = w[t_row + j] - w[t0_row + j]
+        towards = w[_IN + tb.TOWARDS * B + j]
+        k_hip = 0.5 * towards * lh  # the pelvis centre's lateral lever
+        k_sole = towards * lh  # the swing sole's
+        hxp, hxv, hxa = _cubic(w, tb.HIP_X, j, tau)
+        sxp, sxv, sxa = _cubic(w, tb.SWING_X, j, tau)
+        lp, lv, la = _cubic(w, tb.LIFT, j, tau)
+        mp, mv, ma = _cubic(w, tb.TILT, j, tau)
+        wp, wv, wa = _cubic(w, tb.SWAY, j, tau)
+        w[_SHARE + j] = _cubic(w, tb.SHARE, j, tau)[0]
         hxp, hxv, hxa = step * hxp + pelvis, step * hxv, step * hxa
         sxp, sxv, sxa = step * sxp, step * sxv, step * sxa
         lamv, lama = tilt * (mv + sway * (wv - mv)), tilt * (ma + sway * (wa - ma))
@@ -246,8 +275,8 @@ def _principal(q):
 
 
 @njit(**_KW)
-def joint_angles(w, n, out, base):
-    """The joint vector q [rad] of the block into out[j, base:base+8] (a plan's rows).
+def joint_angles(w, n, out, index, base):
+    """The joint vector q [rad] of the block into out[index[j], base:base+8] (a plan's rows).
 
     From ``ik.two_link_ik``'s angles, β_shank = atan2(u, w) + acos(cos φ), each joint
     as its principal value (``joints.principal_angle``).
@@ -260,11 +289,11 @@ def joint_angles(w, n, out, base):
         bt2 = np.arctan2(w[_IK + 8 * B + j], w[_IK + 9 * B + j])
         q = (-lam, -bs, bs - bt, bt, bt2, bs2 - bt2, -bs2, -lam)
         for i in range(8):
-            out[j, base + i] = _principal(q[i])
+            out[index[j], base + i] = _principal(q[i])
 
 
 @njit(**_KW)
-def _kinematics(side, xs, ys, lan, dh_a, d5, n, w):
+def _kinematics(lan, dh_a, d5, n, w):
     """Frames 0..8 (``kinematics.Chain.poses``) and the swing sole point."""
     n = min(n, B)  # a bound on the trip count (module doc)
     # frame 0: columns x0 = z_S, y0 = −y_S, z0 = x_S; origin at the stance ankle
@@ -272,16 +301,17 @@ def _kinematics(side, xs, ys, lan, dh_a, d5, n, w):
         w[_FR + j], w[_FR + B + j], w[_FR + 2 * B + j] = 0.0, 0.0, 1.0
         w[_FR + 3 * B + j], w[_FR + 4 * B + j], w[_FR + 5 * B + j] = 0.0, -1.0, 0.0
         w[_FR + 6 * B + j], w[_FR + 7 * B + j], w[_FR + 8 * B + j] = 1.0, 0.0, 0.0
-        w[_FR + 9 * B + j], w[_FR + 10 * B + j], w[_FR + 11 * B + j] = xs, ys, lan
+        w[_FR + 9 * B + j], w[_FR + 10 * B + j] = w[_XS + j], w[_YS + j]
+        w[_FR + 11 * B + j] = lan
     # one call per row, its index a literal (see ``_outward``)
-    _frame(0, dh_a[0], 0.0, n, w)
-    _frame(1, dh_a[1], 0.0, n, w)
-    _frame(2, dh_a[2], 0.0, n, w)
-    _frame(3, dh_a[3], 0.0, n, w)
-    _frame(4, dh_a[4], d5[side], n, w)
-    _frame(5, dh_a[5], 0.0, n, w)
-    _frame(6, dh_a[6], 0.0, n, w)
-    _frame(7, dh_a[7], 0.0, n, w)
+    _frame(0, dh_a[0], d5, n, w)
+    _frame(1, dh_a[1], d5, n, w)
+    _frame(2, dh_a[2], d5, n, w)
+    _frame(3, dh_a[3], d5, n, w)
+    _frame(4, dh_a[4], d5, n, w)
+    _frame(5, dh_a[5], d5, n, w)
+    _frame(6, dh_a[6], d5, n, w)
+    _frame(7, dh_a[7], d5, n, w)
     f = _FR + 8 * FRAME
     for j in range(n):  # swing sole: ankle_height along x8
         w[_SW + j] = w[f + 9 * B + j] + w[f + j] * lan
@@ -290,12 +320,17 @@ def _kinematics(side, xs, ys, lan, dh_a, d5, n, w):
 
 
 @njit(inline="always", **_KW)
-def _frame(i, a, d, n, w):
-    """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, 0, d) RotZ(θ)."""
+def _frame(i, a, d5, n, w):
+    """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, 0, d) RotZ(θ).
+
+    d is 0 but on row 4, where it is d5 of the sample's stance side.
+    """
     n = min(n, B)  # a bound on the trip count (module doc)
     f, g = _FR + i * FRAME, _FR + (i + 1) * FRAME  # frame i, frame i + 1
     ca, sa = _ALPHA_COS[i], _ALPHA_SIN[i]
+    d_left, d_right = (d5[0], d5[1]) if i == 4 else (0.0, 0.0)
     for j in range(n):
+        d = d_right if w[_SIDE + j] > 0.5 else d_left
         x0, x1, x2 = w[f + j], w[f + 3 * B + j], w[f + 6 * B + j]
         y0, y1, y2 = w[f + B + j], w[f + 4 * B + j], w[f + 7 * B + j]
         z0, z1, z2 = w[f + 2 * B + j], w[f + 5 * B + j], w[f + 8 * B + j]
@@ -316,14 +351,20 @@ def _frame(i, a, d, n, w):
 
 
 @njit(inline="always", **_KW)
-def _link(i, side, com, inertia, n, w):
-    """Link i's CoM offset, CoM acceleration − g, Ḣ and joint axis, from ω, ω̇, a of origin i."""
+def _link(i, com, inertia, n, w):
+    """Link i's CoM offset, CoM acceleration − g, Ḣ and joint axis, from ω, ω̇, a of origin i.
+
+    The CoM in the DH frame is that of the sample's stance side.
+    """
     n = min(n, B)  # a bound on the trip count (module doc)
     f, lk = _FR + i * FRAME, _LK + i * LINK
     sign = _AXIS_SIGN[i]
-    cb0, cb1, cb2 = com[side, i, 0], com[side, i, 1], com[side, i, 2]
+    l0, l1, l2 = com[0, i, 0], com[0, i, 1], com[0, i, 2]
+    r0, r1, r2 = com[1, i, 0], com[1, i, 1], com[1, i, 2]
     i0, i1, i2 = inertia[i, 0], inertia[i, 1], inertia[i, 2]  # principal, DH axes
     for j in range(n):
+        right = w[_SIDE + j] > 0.5
+        cb0, cb1, cb2 = (r0, r1, r2) if right else (l0, l1, l2)
         wx, wy, wz = w[_OMEGA + j], w[_OMEGA + B + j], w[_OMEGA + 2 * B + j]
         dx, dy, dz = w[_DOMEGA + j], w[_DOMEGA + B + j], w[_DOMEGA + 2 * B + j]
         r00, r01, r02 = w[f + j], w[f + B + j], w[f + 2 * B + j]
@@ -356,7 +397,7 @@ def _link(i, side, com, inertia, n, w):
 
 
 @njit(**_KW)
-def _outward(side, com, inertia, gravity, n, w):
+def _outward(com, inertia, gravity, n, w):
     """Outward recursion: ω, ω̇ and a − g from joint to joint, each link's terms (``_link``)."""
     n = min(n, B)  # a bound on the trip count (module doc)
     for j in range(n):
@@ -366,23 +407,23 @@ def _outward(side, com, inertia, gravity, n, w):
     # one call per link with its index a literal, inlined (numba IR) so that every offset
     # is a constant: with i a run-time value the loops of ``_link`` did not vectorise
     # (10 vs 1.3 ns per sample and link)
-    _link(0, side, com, inertia, n, w)
+    _link(0, com, inertia, n, w)
     _advance(1, n, w)
-    _link(1, side, com, inertia, n, w)
+    _link(1, com, inertia, n, w)
     _advance(2, n, w)
-    _link(2, side, com, inertia, n, w)
+    _link(2, com, inertia, n, w)
     _advance(3, n, w)
-    _link(3, side, com, inertia, n, w)
+    _link(3, com, inertia, n, w)
     _advance(4, n, w)
-    _link(4, side, com, inertia, n, w)
+    _link(4, com, inertia, n, w)
     _advance(5, n, w)
-    _link(5, side, com, inertia, n, w)
+    _link(5, com, inertia, n, w)
     _advance(6, n, w)
-    _link(6, side, com, inertia, n, w)
+    _link(6, com, inertia, n, w)
     _advance(7, n, w)
-    _link(7, side, com, inertia, n, w)
+    _link(7, com, inertia, n, w)
     _advance(8, n, w)
-    _link(8, side, com, inertia, n, w)
+    _link(8, com, inertia, n, w)
 
 
 @njit(inline="always", **_KW)
@@ -411,7 +452,7 @@ def _advance(i, n, w):
 
 
 @njit(**_KW)
-def _inward(mass, xs, ys, n, w):
+def _inward(mass, n, w):
     """Inward recursion, the DSP split of the ground wrench, torques, power, ZMP."""
     n = min(n, B)  # a bound on the trip count (module doc)
     for j in range(n):
@@ -436,6 +477,7 @@ def _inward(mass, xs, ys, n, w):
         w[_SM + j], w[_SM + B + j], w[_SM + 2 * B + j] = sm0, sm1, sm2
         # DSP split: the swing foot carries the share 1 − s of the total wrench
         other = 1.0 - w[_SHARE + j]
+        xs, ys = w[_XS + j], w[_YS + j]
         w0, w1, w2 = w[_SW + j], w[_SW + B + j], w[_SW + 2 * B + j]
         e0 = (ys - w1) * fz + w2 * fy
         e1 = -w2 * fx - (xs - w0) * fz
@@ -510,7 +552,7 @@ def _swing_split(i, n, w):
 
 
 @njit(**_KW)
-def _margin(geometry, xs, ys, double, n, w):
+def _margin(geometry, double, n, w):
     """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP.
 
     In SSP the polygon is the stance sole's rectangle (its repeated vertices kept, as
@@ -529,6 +571,7 @@ def _margin(geometry, xs, ys, double, n, w):
     for v in range(8):
         nx, ny = normal_x[v], normal_y[v]
         for j in range(n):
+            xs, ys = w[_XS + j], w[_YS + j]
             dx = (w[_SW + j] - xs) if double else 0.0
             dy = (w[_SW + B + j] - ys) if double else 0.0
             facing = dx * nx + dy * ny > 0
@@ -537,6 +580,7 @@ def _margin(geometry, xs, ys, double, n, w):
     if not double:  # the stance sole alone: an axis-aligned rectangle, in closed form
         for j in range(n):
             px, py = w[_ZX + j], w[_ZY + j]
+            xs, ys = w[_XS + j], w[_YS + j]
             rx0, rx1 = px - (xs - heel), (xs + toe) - px
             ry0, ry1 = py - (ys - half), (ys + half) - py
             inside = min(min(rx0, rx1), min(ry0, ry1))
@@ -571,40 +615,52 @@ def _margin(geometry, xs, ys, double, n, w):
 
 @njit(**_KW)
 def evaluate_block(
-    pf, pi, landing_y, geometry, dh_a, d5, mass, com, inertia, gravity, x, piece, times, start, n,
-    w,
+    inputs, block, n, double, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, w
 ):  # fmt: skip
-    """The pipeline at times[start:start+n] [s] (n ≤ ``BLOCK``) of one piece, into the scratch.
-
-    Afterwards the scratch holds what a score reads (``margin``, ``power``,
-    ``half_angle``), and ``write_rows`` writes a plan's rows from it.
+    """The pipeline at the first n samples of block ``block`` of ``tables.Blocks``.
 
     Args:
-        pf, pi: Piece tables (``GaitTable.floats``, ``.ints``).
-        landing_y: y of each step's stance sole for this individual [m], (N,).
-        geometry, dh_a, d5, mass, com, inertia: ``ChainTable`` fields.
-        gravity: Gravity in S [m/s²], (3,).
-        x: The individual (``tables.COLUMNS``), (6,).
-        piece: Piece index; times: sample times [s], those of the block in or at the
-            ends of the piece.
-        w: Scratch (``scratch``).
+        inputs: ``Blocks.inputs``; block: the block; n: its padded size (≤ ``BLOCK``).
+        double: The block's samples are in double support.
+        Others: see ``evaluate_loaded``.
     """
-    side = pi[piece, tb.SIDE]
-    ys = landing_y[pi[piece, tb.FOOT]]
-    xs = x[tb.STEP_LENGTH] * pf[piece, tb.STANCE_X]
-    _gait_ik(pf, piece, x, geometry, times, start, n, w)
-    _kinematics(side, xs, ys, geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
-    _outward(side, com, inertia, gravity, n, w)
-    _inward(mass, xs, ys, n, w)
-    _margin(geometry, xs, ys, pi[piece, tb.SSP] == 0, n, w)
+    size = tb.INPUTS * B
+    rows = inputs[block * size : (block + 1) * size]  # (a run-time offset from 0 would
+    for k in range(size):  # be taken for a possibly negative index: no vectorising)
+        w[_IN + k] = rows[k]
+    evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, w)
 
 
 @njit(**_KW)
-def write_rows(mass, gravity, xs, ys, n, w, out):
-    """A plan's rows (module layout) of the block just evaluated into out[:n]."""
-    joint_angles(w, n, out, Q)
+def evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, w):
+    """The pipeline at the n ≤ ``BLOCK`` samples whose inputs the scratch holds.
+
+    The inputs (``tables.Blocks``, ``load_sample``) give each sample's time and piece;
+    all samples are of one support kind (``double``: DSP). Afterwards the scratch holds
+    what a score reads (``margin``, ``power``, ``half_angle``), and ``write_rows``
+    writes a plan's rows from it.
+
+    Args:
+        y: y of each step's stance sole for this individual [m], (N,).
+        geometry, dh_a, d5, mass, com, inertia: ``ChainTable`` fields.
+        gravity: Gravity in S [m/s²], (3,).
+        x: The individual (``tables.COLUMNS``), (6,).
+        w: Scratch (``scratch``).
+    """
+    _gait_ik(x, y, geometry, n, w)
+    _kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
+    _outward(com, inertia, gravity, n, w)
+    _inward(mass, n, w)
+    _margin(geometry, double, n, w)
+
+
+@njit(**_KW)
+def write_rows(mass, gravity, n, w, out, index):
+    """A plan's rows (module layout) of the block's first n samples into out[index[j]]."""
+    joint_angles(w, n, out, index, Q)
     for j in range(n):
-        row = out[j]
+        row = out[index[j]]
+        xs, ys = w[_XS + j], w[_YS + j]
         for i in range(8):
             row[QD + i], row[QDD + i] = w[_QD + i * B + j], w[_QDD + i * B + j]
             row[TAU + i] = w[_TAU + i * B + j]

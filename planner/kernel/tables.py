@@ -44,6 +44,14 @@ HZ, LIFT_X, TILT_X, PELVIS, STEP_LENGTH, SWAY_SHARE = range(6)
 COLUMNS = 6
 # geometry vector
 SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH = range(7)
+# A block (``Blocks``): at most BLOCK samples, in rows of BLOCK floats per input: the
+# sample's time [s], then its piece's floats (T0, T1, STANCE_X, TOWARDS, the shapes:
+# the same columns as ``GaitTable.floats``, T1 replaced by the time), its stance side
+# (0.0 left / 1.0 right) and its footprint index (as a float).
+BLOCK = 64
+IN_T, IN_SIDE, IN_FOOT = T1, PIECE_FLOATS, PIECE_FLOATS + 1
+INPUTS = PIECE_FLOATS + 2
+_ALIGN = 8  # a block's length is padded to a multiple of this (one AVX-512 vector)
 
 # The Table-I structure the kernel is written for (kinematics.Chain.from_spec).
 _ALPHA = np.array([0, -np.pi / 2, 0, 0, 0, 0, 0, np.pi / 2])
@@ -264,3 +272,47 @@ def limit_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.
         pieces.append(np.full(ts.size, k))
         times.append(ts)
     return np.concatenate(pieces), np.concatenate(times)
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """A sample list cut into blocks of ``BLOCK`` samples of one support kind (SSP or DSP).
+
+    The samples of each kind are taken in time order, 64 at a time, and a block's last
+    sample is repeated up to a multiple of 8, so the kernel's loops over a block run
+    whole vectors; only a block's first ``count`` samples are read back.
+
+    Attributes:
+        inputs: Per block, per input (``IN_T`` … ``INPUTS``), a row of ``BLOCK``
+            floats, flat (blocks × INPUTS × BLOCK,).
+        index: Position of each sample of a block in the sample list, (blocks, BLOCK).
+        count: Samples of each block, (blocks,); size: the padded length, (blocks,).
+        double: 1 for a block of double-support samples, (blocks,).
+    """
+
+    inputs: np.ndarray
+    index: np.ndarray
+    count: np.ndarray
+    size: np.ndarray
+    double: np.ndarray
+
+    @classmethod
+    def of(cls, table: GaitTable, pieces: np.ndarray, times: np.ndarray) -> Blocks:
+        ssp = table.ints[pieces, SSP]
+        chunks = []
+        for kind in (1, 0):
+            where = np.flatnonzero(ssp == kind)
+            chunks += [where[k : k + BLOCK] for k in range(0, where.size, BLOCK)]
+        count = np.array([c.size for c in chunks], dtype=np.int64)
+        size = -(-count // _ALIGN) * _ALIGN
+        index = np.empty((len(chunks), BLOCK), dtype=np.int64)
+        for b, c in enumerate(chunks):
+            index[b, : c.size], index[b, c.size :] = c, c[-1]
+        rows = np.empty((len(chunks), INPUTS, BLOCK))
+        piece = pieces[index]
+        rows[:, :PIECE_FLOATS] = np.moveaxis(table.floats[piece], 2, 1)
+        rows[:, IN_T] = times[index]
+        rows[:, IN_SIDE] = table.ints[piece, SIDE]
+        rows[:, IN_FOOT] = table.ints[piece, FOOT]
+        double = 1 - table.ints[pieces[index[:, 0]], SSP]
+        return cls(rows.ravel(), index, count, size, double.astype(np.int64))
