@@ -90,7 +90,7 @@ def series(
     return out
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _margin_at(args, x, y, piece, t, scratch):
     """Signed ZMP margin [m] of individual x at time t [s] of ``piece`` (one-sample block).
 
@@ -108,7 +108,7 @@ def _margin_at(args, x, y, piece, t, scratch):
     return sm.margin(scratch, 0)
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, scratch):
     """Smallest margin in [ta, tc] around the sampled minimum fb at tb_ (parabolic search).
 
@@ -144,7 +144,7 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, scratch):
     return best, count
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _refine_all(args, x, y, pieces, times, margin, low, scratch):
     """Smallest margin [m] found by refining the local minima of the sampled ``margin``.
 
