@@ -5,11 +5,10 @@
 time and its gait piece's coefficients, so a block takes samples of several pieces
 and steps, and is full), what ``plan.Plan`` holds at those instants. The samples
 are the innermost loop of every stage and every stage is one branch-free loop over
-them, with the chain's known structure (the
-DH twists 0, ∓π/2, the one non-zero offset d5) hoisted out of it, so the loops
-vectorise (SIMD over samples). Quantities live in structure-of-arrays scratch
-(``Scratch``: one row of ``BLOCK`` floats per scalar). The maths is that of the
-readable modules:
+them, with the chain's known structure (the DH twists 0, ∓π/2, the one non-zero
+offset d5) hoisted out of it, so the loops vectorise (SIMD over samples). Quantities
+live in structure-of-arrays scratch (``Scratch``: one row of ``BLOCK`` floats per
+scalar). The maths is that of the readable modules:
 
 * gait: the piece's cubics and their derivatives (``tables``), the tilted-plane
   heights of ``ik.tilted_plane_height``;
@@ -30,21 +29,24 @@ All vectors are in the slope frame S [m, m/s, m/s², N, N m]; angles [rad].
 
 Layout of the scratch: one flat array ``w`` of rows of ``BLOCK`` floats, row r holding
 one quantity over the block (w[r + j] at sample j, r a multiple of ``BLOCK``), every
-row offset a compile-time constant. The compiler then sees that the rows a loop
-writes never overlap the rows it reads, which it must know to vectorise the loop
-(rows of separate arrays, or of a 2-D array with run-time strides, it cannot tell
-apart); and every stage bounds its loops' trip count by ``BLOCK`` (``min(n, B)``),
-since a row's distance from the next is then at least the trip count: without the
-bound the compiler must assume the rows may overlap and leaves the loops scalar.
-Measured per sample on one core (SSP block of 64, numba 0.61, AVX-512):
-gait and IK 20 ns (of which sin/cos of λ ~9 ns: libm does not vectorise), FK 9 ns,
-then the recursions. A block's cost is far from proportional to its samples: the
-samples past the last multiple of 8 run scalar (~400-900 ns each), and each stage
-has a fixed cost, so (Zen 5, numba 0.68) a block of 64 costs 73 ns per sample, one of
-33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43 (its DSPs) 113:
-hence full blocks of several pieces, padded to a multiple of 8. A larger block does
-not help (128: 79 ns, the scratch outgrows the caches), a smaller one neither (32:
-92 ns).
+row offset a compile-time constant (but in the outward recursion's loop over links,
+``_outward``). The compiler then sees that the rows a loop writes never overlap the
+rows it reads, which it must know to vectorise the loop (rows of separate arrays, or
+of a 2-D array with run-time strides, it cannot tell apart); and every stage bounds
+its loops' trip count by ``BLOCK`` (``min(n, B)``), since a row's distance from the
+next is then at least the trip count: without the bound the compiler must assume the
+rows may overlap and leaves the loops scalar.
+
+Measured per sample on one core (block of 64, numba 0.68, Zen 5 AVX-512, load ~2):
+copying the block's inputs 1 ns, gait and IK 13 ns (20 with libm's sin/cos of λ,
+which does not vectorise: ``trig``), FK 8.5, outward recursion 21, inward 14,
+margin 1 (SSP) or 6 (DSP); a whole block 66-71 ns. A block's cost is far from
+proportional to its samples: the samples past the last multiple of 8 run scalar
+(~400-900 ns each), and each stage has a fixed cost, so a block of 64 cost 73 ns per
+sample, one of 33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43
+(its DSPs) 113, before blocks took several pieces: hence full blocks, padded to a
+multiple of 8. A larger block does not help (128: 79 ns, the scratch outgrows the
+caches), a smaller one neither (32: 92 ns).
 """
 
 from __future__ import annotations
