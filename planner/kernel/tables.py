@@ -249,26 +249,34 @@ PROBE = 1e-3  # a probe's distance from a piece's end, in units of its sample sp
 
 
 def limit_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
-    """The GA's samples: the grid of ``timeline`` plus both one-sided limits of every piece.
+    """The GA's samples: the grid of ``timeline`` plus both one-sided limits of every phase.
 
-    Each piece gets its two ends and the grid times strictly inside it, so every
-    phase change is seen from both sides (last DSP sample, first SSP sample at the
-    same instant), and next to each end a probe ``PROBE`` of the sample spacing
-    inside: where the margin still falls going inwards from an end, the probe is a
-    local minimum of the samples and ``run.scores`` refines the bracket (end, probe,
-    next sample). Sorted by time, pieces in order.
+    Each piece gets the grid times strictly inside it, and each end of a phase (DSP,
+    SSP) is a sample of the piece on its side, so every phase change is seen from both
+    sides (last DSP sample, first SSP sample at the same instant); next to each such
+    end a probe ``PROBE`` of the sample spacing inside: where the margin still falls
+    going inwards from an end, the probe is a local minimum of the samples and
+    ``run.scores`` refines the bracket (end, probe, next sample). The knot between the
+    SSP's two pieces, where the gait is continuous to its accelerations and so the
+    margin too, is one sample (of the first piece). Sorted by time, pieces in order.
+    (The knot's second copy and its probes were 12 of 479 samples at 100 per step, and
+    put the SSP's 252 others in 5 blocks of 64 rather than 4.)
 
     Returns:
         (piece index (m,), t [s] (m,)).
     """
     t = timeline.t
     eps = 1e-9 * timeline.step_time
+    phase = table.ints[:, PHASE]
     pieces, times = [], []
     for k, (t0, t1) in enumerate(table.floats[:, [T0, T1]]):
         inner = t[(t > t0 + eps) & (t < t1 - eps)]
         first, last = (inner[0], inner[-1]) if inner.size else (t1, t0)
-        probes = [t0 + PROBE * (first - t0), t1 - PROBE * (t1 - last)]
-        ts = np.concatenate([[t0, probes[0]], inner, [probes[1], t1]])
+        starts = k == 0 or phase[k - 1] != phase[k]
+        ends = k == len(phase) - 1 or phase[k + 1] != phase[k]
+        head = [t0, t0 + PROBE * (first - t0)] if starts else []
+        tail = [t1 - PROBE * (t1 - last), t1] if ends else [t1]  # a knot inside a phase: once
+        ts = np.concatenate([head, inner, tail])
         pieces.append(np.full(ts.size, k))
         times.append(ts)
     return np.concatenate(pieces), np.concatenate(times)
