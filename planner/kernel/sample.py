@@ -55,7 +55,6 @@ import numpy as np
 from numba import njit
 
 from planner.kernel import tables as tb
-from planner.kernel.trig import sincos, sincos_fixup
 
 # Row layout of a plan sample (``write_rows``): where each quantity sits.
 Q, QD, QDD, TAU = 0, 8, 16, 24  # (8,) each: Table-I order [rad, rad/s, rad/s², N m]
@@ -205,8 +204,10 @@ def _gait_ik(x, y, geometry, n, w):
         wp, wv, wa = _cubic(w, tb.SWAY, j, tau)
         w[_LAM + j] = tilt * (mp + sway * (wp - mp))
         w[_XS + j] = step * w[_IN + tb.STANCE_X * B + j]
-        w[_ST + j], w[_CT + j] = sincos(w[_LAM + j])  # (libm's would not vectorise)
-    sincos_fixup(w, _LAM, _ST, _CT, n)
+    # sin and cos of λ: a scalar loop of its own (libm calls do not vectorise)
+    for j in range(n):
+        w[_ST + j] = np.sin(w[_LAM + j])
+        w[_CT + j] = np.cos(w[_LAM + j])
     for j in range(n):
         tau = w[t_row + j] - w[t0_row + j]
         towards = w[_IN + tb.TOWARDS * B + j]
