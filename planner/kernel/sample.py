@@ -38,9 +38,11 @@ next is then at least the trip count: without the bound the compiler must assume
 rows may overlap and leaves the loops scalar.
 
 Measured per sample on one core (block of 64, numba 0.68, Zen 5 AVX-512, load ~2):
-copying the block's inputs 1 ns, gait and IK 13 ns (20 with libm's sin/cos of λ,
-which does not vectorise: ``trig``), FK 8.5, outward recursion 21, inward 14,
-margin 1 (SSP) or 6 (DSP); a whole block 66-71 ns. A block's cost is far from
+copying the block's inputs 1 ns, gait and IK 20 ns (of which ~7 ns libm's sin/cos of
+λ, a scalar loop: numba vectorises them only through SVML, which llvmlite 0.50's
+wheels are built without; a branch-free sin/cos of our own measured 13 ns but would
+be a home-made copy of libm, so it is not used), FK 8.5, outward recursion 21, inward
+14, margin 1 (SSP) or 6 (DSP); a whole block ~73-78 ns. A block's cost is far from
 proportional to its samples: the samples past the last multiple of 8 run scalar
 (~400-900 ns each), and each stage has a fixed cost, so a block of 64 cost 73 ns per
 sample, one of 33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43
