@@ -36,8 +36,9 @@ from bench.sim.playback import (
     SETTLE_TIME,
     Recording,
     build_model,
-    control_sequence,
+    commands_and_aim,
     initial_state,
+    on_rows,
     recording_from_rollout,
 )
 from bench.sim.trial import TrialResult, TrialSpec, compare
@@ -96,19 +97,12 @@ def simulate(
         model.geom_solref[:, 0] = timeconst  # floor and feet: the contact's is theirs
     servo = servo_settings(plan.spec, actuators)
     floor = scene_corner_stiffness(model)
-    t, q_ref = control_sequence(
-        plan,
-        timestep,
-        SETTLE_TIME,
-        HOLD_TIME,
-        servo,
-        floor_stiffness=None if give is False else floor,
+    t, q_ref, aim = commands_and_aim(
+        plan, timestep, SETTLE_TIME, HOLD_TIME, servo, None if give is False else floor
     )
-    aimed = servo.feedforward if give is None else give
-    offset = give_feedforward(plan, floor) if aimed else np.zeros((plan.t.size, 8))
-    rows = np.column_stack([np.interp(t, plan.t, offset[:, j]) for j in range(8)])
-    if aimed and not servo.feedforward:
-        q_ref = q_ref + rows
+    if give and not servo.feedforward:  # the give alone, in a mode that feeds nothing forward
+        aim = on_rows(t, plan, give_feedforward(plan, floor))
+        q_ref = q_ref + aim
     state, sensordata = rollout.rollout(
         model, mujoco.MjData(model), initial_state(model, plan), q_ref[None]
     )
@@ -120,7 +114,7 @@ def simulate(
         q_ref,
         rotation_slope_to_world(plan.params.slope),
         servo.force_limit,
-        aim_offset=rows if aimed else None,
+        aim_offset=aim,
     )
 
 

@@ -55,7 +55,7 @@ class Recording:
         diverged_at: Time the simulation blew up [s], or None.
         aim_offset: What the command aims the joints at beyond the planned angles, MJCF
             order [rad], (m, 8): a feedforward mode's ankle turns against the floor's give
-            (``aim_offset``); None: the planned angles themselves (also for a closed-loop
+            (``commands_and_aim``); None: the planned angles themselves (also for a closed-loop
             controller, whose own aim is not known here).
     """
 
@@ -115,29 +115,37 @@ def control_sequence(
     The command is the planned angle [rad], linearly interpolated to the rows; with a
     feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``, held at its
     first and last value while settling and holding), which adds τ_ff to the actuator's
-    force (``model.Servo``), and turned by ``aim_offset``.
+    force (``model.Servo``), and, on a soft floor, its ankles turned against the soles'
+    give (``floor.give_feedforward``).
 
     Args:
         floor_stiffness: k_c of each sole corner of the scene's floor [N/m]
             (``floor.scene_corner_stiffness``); None: a rigid floor, no give to cancel.
     """
-    t = _rows(plan, timestep, settle, hold)
-    q_ref = _on_rows(t, plan, plan.q_left_right)
-    if servo is not None and servo.feedforward:
-        q_ref += _on_rows(t, plan, feedforward_torque(plan, servo)) / servo.kp
-        q_ref += _on_rows(t, plan, aim_offset(plan, servo, floor_stiffness))
+    t, q_ref, _ = commands_and_aim(plan, timestep, settle, hold, servo, floor_stiffness)
     return t, q_ref
 
 
-def aim_offset(plan: Plan, servo: Servo | None, floor_stiffness: float | None) -> np.ndarray:
-    """What a mode aims the joints at beyond the plan, MJCF order [rad], (n, 8) on ``plan.t``.
-
-    A feedforward mode on a soft floor turns the ankles by ``floor.give_feedforward``;
-    otherwise zero.
-    """
-    if servo is None or not servo.feedforward or floor_stiffness is None:
-        return np.zeros((plan.t.size, 8))
-    return give_feedforward(plan, floor_stiffness)
+def commands_and_aim(
+    plan: Plan,
+    timestep: float,
+    settle: float,
+    hold: float,
+    servo: Servo | None = None,
+    floor_stiffness: float | None = None,
+):
+    """``control_sequence``'s row times and commands, and what the command aims the joints
+    at beyond the plan on those rows (the ankles' turn against the give), MJCF order [rad],
+    (m, 8): None where the mode aims at the plan itself (no feedforward, or a rigid floor)."""
+    t = _rows(plan, timestep, settle, hold)
+    q_ref = on_rows(t, plan, plan.q_left_right)
+    aim = None
+    if servo is not None and servo.feedforward:
+        q_ref += on_rows(t, plan, feedforward_torque(plan, servo)) / servo.kp
+        if floor_stiffness is not None:
+            aim = on_rows(t, plan, give_feedforward(plan, floor_stiffness))
+            q_ref += aim
+    return t, q_ref, aim
 
 
 def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray:
@@ -145,7 +153,7 @@ def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray
     return np.arange(m) * timestep - settle
 
 
-def _on_rows(t: np.ndarray, plan: Plan, x: np.ndarray) -> np.ndarray:
+def on_rows(t: np.ndarray, plan: Plan, x: np.ndarray) -> np.ndarray:
     """``x`` (n, 8) on ``plan.t`` interpolated to the rows ``t``, ends held."""
     return np.column_stack([np.interp(t, plan.t, x[:, j]) for j in range(x.shape[1])])
 
@@ -214,8 +222,8 @@ def play_many(
     """
     groups: dict[tuple, list[int]] = {}
     for i, plan in enumerate(plans):
-        t, _ = control_sequence(plan, timestep, settle, hold)
-        key = (id(plan.spec), plan.params.slope, friction[i], actuators[i], t.size)
+        rows = _rows(plan, timestep, settle, hold).size
+        key = (id(plan.spec), plan.params.slope, friction[i], actuators[i], rows)
         groups.setdefault(key, []).append(i)
     out: list[Recording | None] = [None] * len(plans)
     for (_, _, mu, mode, _), members in groups.items():
@@ -224,14 +232,10 @@ def play_many(
         servo = servo_settings(first.spec, mode)
         floor = scene_corner_stiffness(model)
         controls, aims, states, times = [], [], [], None
-        aiming = servo.feedforward
         for i in members:
-            times, q_ref = control_sequence(
-                plans[i], timestep, settle, hold, servo, floor_stiffness=floor
-            )
+            times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)
             controls.append(q_ref)
-            offset = aim_offset(plans[i], servo, floor)
-            aims.append(_on_rows(times, plans[i], offset) if aiming else None)
+            aims.append(aim)
             states.append(initial_state(model, plans[i]))
         datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(members))))]
         state, sensordata = rollout.rollout(model, datas, np.array(states), np.array(controls))
