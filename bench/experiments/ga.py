@@ -244,8 +244,6 @@ def _drive(algorithm, pymoo_problem, settings: GaSettings, progress: bool, label
             batches.append(sum(len(x) for x in log[before:]))
             if bar is not None:
                 bar.update(1)
-    if hasattr(algorithm, "finish"):
-        algorithm.finish()
     return time.perf_counter() - start, batches
 
 

@@ -170,9 +170,6 @@ class ArrayGA:
             self.X, self.F, self.CV = X[keep], F[keep], CV[keep]
         self.done += 1
 
-    def finish(self) -> None:
-        pass
-
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(F (n, 1), CV (n,)): pymoo's CV is the sum of the positive parts of G."""
         out = self.problem.evaluate(X, return_values_of=self.values, return_as_dictionary=True)
