@@ -26,8 +26,11 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
   pymoo's (μ + λ) truncation of parents and children, which is stronger elitism
   than MATLAB's 5 % elite count. Duplicates are eliminated (and re-mated).
   The GA runs as ``ga_operators.ArrayGA``: pymoo's GA on arrays, with pymoo's
-  operators and the same comparisons and random draws, without pymoo's
-  per-individual Python (NSGA-II keeps pymoo's algorithm).
+  operators and the same comparisons, without pymoo's per-individual Python, and
+  with mating rounds sized for the expected share of duplicates (the same
+  operators and the same rule for which children are kept, in fewer rounds;
+  ``batched=False`` is pymoo's run bit for bit).
+  NSGA-II keeps pymoo's algorithm.
 * seed → ``seed=`` of the algorithm: pymoo 0.6 draws every random number from
   one ``numpy.random.Generator`` seeded with it, and the planner is
   deterministic, so a seed fixes the run bit for bit.
@@ -247,16 +250,22 @@ def _drive(algorithm, pymoo_problem, settings: GaSettings, progress: bool, label
     return time.perf_counter() - start, batches
 
 
-def run_ga(problem, settings: GaSettings, *, progress: bool = False) -> RunResult:
+def run_ga(
+    problem, settings: GaSettings, *, progress: bool = False, batched: bool = True
+) -> RunResult:
     """Minimise the problem's objective with pymoo's GA under ``settings`` (module doc).
 
     Args:
         problem: A ``planner.gait_search.GaitProblem`` or anything with its interface.
         progress: Show a tqdm bar (one tick per generation) on stderr.
+        batched: Size the mating rounds by the last round's share of unique children
+            (``ga_operators.ArrayGA``); False mates as pymoo does, bit for bit.
     """
     pymoo_problem = _PymooProblem(problem, settings.constraint)
     ops = settings.operators()
-    algorithm = ArrayGA(ops["pop_size"], ops["n_offsprings"], ops["crossover"], ops["mutation"])
+    algorithm = ArrayGA(
+        ops["pop_size"], ops["n_offsprings"], ops["crossover"], ops["mutation"], batched=batched
+    )
     wall_s, batches = _drive(algorithm, pymoo_problem, settings, progress, "GA")
     return _result(pymoo_problem.log, wall_s, batches)
 

@@ -27,14 +27,26 @@ on (n, n_var) arrays of X, F and CV:
 * survival: the (μ + λ) truncation of parents then children by (CV, F), as
   ``FitnessSurvival``'s lexsort.
 
-Every random number is drawn from the same ``numpy.random.Generator`` (seeded
-with the run's seed), at the same moment and in the same amount as pymoo draws
-it, so a seed gives pymoo's run bit for bit; ``tests/experiments/test_ga.py``
-holds a run equal to one of pymoo's own GA. The operators (SBX, PM) stay
-pymoo's: this module calls their array methods and never re-implements them.
-The per-generation cost left is measured by ``slopewalk benchmark ga``
-(``driver_ms_per_gen``: 6 ms on the idle 2-core machine, nearly all of it pymoo's
-SBX and PM on the one or two pairs of each late mating round, ~0.1 ms a round).
+With ``batched=False`` every random number is drawn from the same
+``numpy.random.Generator`` (seeded with the run's seed), at the same moment and
+in the same amount as pymoo draws it, so a seed gives pymoo's run bit for bit;
+``tests/experiments/test_ga.py`` holds a run equal to one of pymoo's own GA. The
+operators (SBX, PM) stay pymoo's: this module calls their array methods and
+never re-implements them. That run spent 6 ms per generation outside the planner
+on the idle 2-core machine, nearly all of it in pymoo's SBX and PM on the one or
+two pairs of each of ~25 late mating rounds (~0.14 ms a round, whatever its size).
+
+Batched mating (``batched=True``, what ``ga.run_ga`` runs) changes one thing: a
+round mates enough pairs for the children still missing divided by the share of
+unique children in the previous round, so a generation takes 1.8 rounds instead
+of 24.5 (paper setting, 22.5°) and the driver ~1 ms. The children kept are still
+the first unique ones of a stream of tournament-crossover-mutation draws, as
+many as pymoo keeps; what differs is only where the stream is cut into rounds,
+so which random numbers make which child: tournament entrants come from
+``random_permutations`` of the population per round, and a bigger round spreads
+its permutations over more tournaments. Until a round meets a duplicate the two
+are the same run; the test holds that, and the GA's results for both over seeds
+and slopes are compared in ``results/optimize/README.md``.
 
 ``ArrayDuplicates`` is pymoo's duplicate test for its own algorithms (NSGA-II),
 reading each population's X once per call.
@@ -51,6 +63,7 @@ from pymoo.util.misc import cdist, random_permutations
 
 EPSILON = 1e-16  # distance at or below which two individuals are duplicates (pymoo's default)
 MAX_ROUNDS = 100  # mating rounds per generation at most (pymoo's GeneticAlgorithm)
+MIN_SHARE = 1 / 16  # floor of the unique share that sizes a batched round (16x its need at most)
 
 
 def _values(pop, name: str) -> np.ndarray:
@@ -66,23 +79,24 @@ def _near(D: np.ndarray) -> np.ndarray:
 def unique(X: np.ndarray, *others: np.ndarray) -> np.ndarray:
     """Mask of the rows of X that duplicate neither an earlier row of X nor a row of ``others``.
 
-    pymoo's ``DefaultDuplicateElimination.do(pop, *others)``, on arrays: X is
-    tested against itself first, then against each of ``others`` in turn, only
-    the rows still kept being tested.
+    pymoo's ``DefaultDuplicateElimination.do(pop, *others)``, on arrays. A row is
+    kept when it is near no earlier row of X (kept or not) and no row of ``others``;
+    the tests are independent, so this one runs them in the order that costs least:
+    against ``others`` first, then only the rows still kept against the earlier rows
+    of X (pymoo tests X against itself first, at n² distances, which a batched round
+    of ~1,000 children would make the dearest step).
     """
     keep = np.ones(len(X), dtype=bool)
-    if len(X) == 0:
-        return keep
-    D = cdist(X, X)
-    D[np.triu_indices(len(X))] = np.inf
-    keep &= ~_near(D)
     for other in others:
-        if len(other) == 0:
+        if len(other) == 0 or not keep.any():
             continue
-        if not keep.any():
-            break
         kept = np.flatnonzero(keep)
         keep[kept[_near(cdist(X[kept], other))]] = False
+    kept = np.flatnonzero(keep)
+    if kept.size:
+        D = cdist(X[kept], X)
+        D[np.arange(len(X))[None, :] >= kept[:, None]] = np.inf  # only earlier rows count
+        keep[kept[_near(D)]] = False
     return keep
 
 
@@ -139,17 +153,18 @@ class ArrayGA:
         X, F, CV: The current population: (n, n_var), (n, 1) objective, (n,) violation.
     """
 
-    def __init__(self, pop_size, n_offsprings, crossover, mutation):
+    def __init__(self, pop_size, n_offsprings, crossover, mutation, *, batched=True):
         if crossover.n_parents != 2 or crossover.n_offsprings != 2:
             raise ValueError("ArrayGA needs a crossover of 2 parents into 2 children")
         self.pop_size, self.n_offsprings = pop_size, n_offsprings
-        self.crossover, self.mutation = crossover, mutation
+        self.crossover, self.mutation, self.batched = crossover, mutation, batched
 
     def setup(self, problem, termination, seed) -> ArrayGA:
         kind, self.generations = termination
         if kind != "n_gen":
             raise ValueError(f"termination {termination!r}: ArrayGA stops after ('n_gen', G)")
         self.problem, self.rng, self.done = problem, np.random.default_rng(seed), 0
+        self.share = 1.0  # share of unique children in the last mating round
         self.values = ["F"] + (["G"] if problem.n_ieq_constr > 0 else [])
         return self
 
@@ -178,15 +193,23 @@ class ArrayGA:
         return out["F"], cv
 
     def _mate(self) -> np.ndarray:
-        """``n_offsprings`` unique children of the current population, pymoo's draws."""
+        """``n_offsprings`` unique children of the current population (module doc: rounds).
+
+        A round mates enough pairs for the children still missing; when ``batched``,
+        that count is divided by the share of unique children in the last round
+        (floored at ``MIN_SHARE``), so a converged population, whose children mostly
+        copy a parent, still gets its children in one or two rounds.
+        """
         off = np.empty((0, self.problem.n_var))
         for _ in range(MAX_ROUNDS):
-            if len(off) >= self.n_offsprings:
+            missing = self.n_offsprings - len(off)
+            if missing <= 0:
                 break
-            n_matings = math.ceil((self.n_offsprings - len(off)) / 2)
+            n_matings = math.ceil(missing / 2 / (self.share if self.batched else 1.0))
             children = self._children(n_matings)
-            children = children[unique(children, self.X, off)]
-            off = np.concatenate([off, children[: self.n_offsprings - len(off)]])
+            keep = unique(children, self.X, off)
+            self.share = max(keep.mean(), MIN_SHARE)
+            off = np.concatenate([off, children[keep][:missing]])
         return off
 
     def _children(self, n_matings: int) -> np.ndarray:

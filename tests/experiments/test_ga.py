@@ -19,6 +19,7 @@ from bench.experiments.ga import (
     run_ga,
     run_nsga2,
 )
+from bench.experiments.ga_operators import ArrayGA
 from planner.errors import SlopewalkError
 from planner.gait_search import (
     PENALTY,
@@ -309,7 +310,7 @@ def test_array_operators_make_the_same_run_as_pymoo_s(constraint):
     # versions that must compare, eliminate and draw exactly as pymoo's do
     terraces = Terraces(r=0.1)
     settings = GaSettings(population=30, generations=40, seed=3, constraint=constraint)
-    ours = run_ga(terraces, settings)
+    ours = run_ga(terraces, settings, batched=False)
     problem = _PymooProblem(terraces, constraint)
     _drive(
         GA(**settings.operators() | {"eliminate_duplicates": True}), problem, settings, False, ""
@@ -317,6 +318,46 @@ def test_array_operators_make_the_same_run_as_pymoo_s(constraint):
     theirs = problem.log.arrays()
     assert np.array_equal(ours.log["X"], theirs["X"])
     assert np.array_equal(ours.log["F"], theirs["F"])
+
+
+def _matings(problem, settings: GaSettings, batched: bool) -> list[tuple]:
+    """(parents, children, mating rounds) of each generation after the first of a run."""
+    pymoo_problem = _PymooProblem(problem, settings.constraint)
+    ops = settings.operators()
+    ga = ArrayGA(ops["pop_size"], ops["n_offsprings"], ops["crossover"], ops["mutation"],
+                 batched=batched)  # fmt: skip
+    ga.setup(pymoo_problem, termination=("n_gen", settings.generations), seed=settings.seed)
+    rounds, children = [], ga._children
+    ga._children = lambda n: rounds.append(n) or children(n)
+    ga.next()
+    out = []
+    while ga.has_next():
+        parents, before, logged = ga.X.copy(), len(rounds), len(pymoo_problem.log.X)
+        ga.next()
+        out.append((parents, pymoo_problem.log.X[logged], len(rounds) - before))
+    return out
+
+
+def test_batched_mating_gives_each_generation_unique_children_in_fewer_rounds():
+    # late in a run most children copy a parent; a batched round mates for the expected
+    # share of unique children, so the generation needs few rounds, and still gets
+    # exactly its children, none of them a parent's or another child's copy
+    settings = GaSettings(population=30, generations=150, seed=3, constraint="margin")
+    runs = {b: _matings(Bowl(), settings, b) for b in (False, True)}
+    for parents, children, _ in runs[True]:
+        assert len(children) == settings.population
+        pairs = np.vstack([parents, children])
+        D = np.linalg.norm(children[:, None] - pairs[None], axis=-1)
+        D[:, len(parents) :][np.diag_indices(len(children))] = np.inf  # a child and itself
+        assert D.min() > 1e-16
+    late = {b: np.mean([r for *_, r in run[-50:]]) for b, run in runs.items()}
+    assert late[False] > 8 and late[True] < 3
+    # until a round meets a duplicate, batched rounds are pymoo's: with this seed the
+    # first mating needs one round, and gives the same children
+    first = GaSettings(population=30, generations=2, seed=5, constraint="margin")
+    (_, pymoo_children, rounds), = _matings(Bowl(), first, False)  # fmt: skip
+    (_, batched_children, _), = _matings(Bowl(), first, True)  # fmt: skip
+    assert rounds == 1 and np.array_equal(batched_children, pymoo_children)
 
 
 def test_array_duplicates_make_the_same_nsga2_run_as_pymoo_s():
