@@ -20,7 +20,8 @@ vs the open-loop rollout's on the nominal trial (``controller_figures``).
 ``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s`` of
 the search, ``process_wall_s`` of a fresh ``python`` process doing it, start-up
 included, and ``driver_ms_per_gen``, the time per generation spent outside the
-planner: pymoo's operators, the objective treatment and the log).
+planner: pymoo's operators, the objective treatment and the log; ``pymoo_mating_*``
+and ``batched_speedup``: the same search with pymoo's own mating rounds).
 
 ``sweep``: the default sweep end to end on all cores (``trials``, ``wall_s``,
 ``trials_per_s``) and its simulated steps per second as a share of the raw
@@ -246,7 +247,10 @@ def ga_figures() -> dict:
     with other jobs' load than the wall-time split; it includes what the kernel's
     worker threads burn while the driver runs, i.e. spinning OpenMP workers, which
     ``planner/kernel/__init__.py`` puts to sleep). ``feasible`` and ``work_J`` say
-    what it found, so a fast but broken run shows.
+    what it found, so a fast but broken run shows. ``pymoo_mating_*``: the same
+    search with pymoo's one-for-one mating rounds (``run_ga(batched=False)``, pymoo's
+    run bit for bit) in the same process, and ``batched_speedup`` its wall time over
+    the batched run's.
     """
     from bench.experiments.ga import GaSettings, run_ga
     from planner.gait_search import GaitProblem, ga_params
@@ -259,6 +263,7 @@ def ga_figures() -> dict:
     cpu = time.process_time()
     result = run_ga(timed, settings)
     cpu = time.process_time() - cpu
+    pymoo = run_ga(problem, settings, batched=False)
     start = time.perf_counter()
     code = _GA_PROCESS % GA_SLOPE_DEG
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -276,6 +281,10 @@ def ga_figures() -> dict:
         "feasible": result.best.feasible,
         "work_J": result.best.work,
         "margin_mm": result.best.margin * 1e3,
+        "pymoo_mating_wall_s": pymoo.wall_s,
+        "pymoo_mating_work_J": pymoo.best.work,
+        "pymoo_mating_feasible": pymoo.best.feasible,
+        "batched_speedup": pymoo.wall_s / result.wall_s,
         "load_1min": os.getloadavg()[0],
     }
 

@@ -45,8 +45,9 @@ many as pymoo keeps; what differs is only where the stream is cut into rounds,
 so which random numbers make which child: tournament entrants come from
 ``random_permutations`` of the population per round, and a bigger round spreads
 its permutations over more tournaments. Until a round meets a duplicate the two
-are the same run; the test holds that, and the GA's results for both over seeds
-and slopes are compared in ``results/optimize/README.md``.
+are the same run; the test holds that. ``slopewalk benchmark ga`` runs both on the
+paper's 22.5° case (``pymoo_mating_*``), and ``results/optimize/README.md`` gives
+both over seeds and slopes.
 
 ``ArrayDuplicates`` is pymoo's duplicate test for its own algorithms (NSGA-II),
 reading each population's X once per call.
