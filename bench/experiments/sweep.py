@@ -134,6 +134,7 @@ def outcome_columns(result, plan) -> dict:
         "predicted_verdict": result.predicted_verdict,
         "predicted_events": ";".join(dict.fromkeys(e.kind for e in result.predicted_events)),
         "predicted_rotation_deg": float(np.rad2deg(result.predicted_rotation)),
+        "simulated_max_tilt_deg": float(np.rad2deg(result.simulated_max_tilt)),
         "unplanned_support_s": result.unplanned_support_s,
         "error": "",
     }

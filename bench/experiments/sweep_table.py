@@ -17,8 +17,8 @@ A file that is not such a table (binary, not UTF-8, no header, other columns,
 a line of the wrong width, a verdict that is not a verdict) is refused in one
 line naming the file and what is wrong; it is never truncated or overwritten.
 The one exception: a finished table of an older version (``PREVIOUS_LAYOUTS``:
-its columns had a ``wall_s``, or lacked the fidelity columns), which a fresh run
-replaces (``--resume`` refuses it).
+its columns had a ``wall_s``, or lacked the fidelity columns or the simulated
+tilt), which a fresh run replaces (``--resume`` refuses it).
 
 Values, chosen so that regenerating a table from the same trials gives the
 same bytes: the inputs (``step_time``, ``slope_deg``, ``friction``) as written
@@ -89,6 +89,7 @@ COLUMNS = (
     "predicted_verdict",  # the most severe predicted event, or stable
     "predicted_events",  # predicted kinds in order of first occurrence, ";"-joined
     "predicted_rotation_deg",  # largest predicted turn of the support about its edge
+    "simulated_max_tilt_deg",  # largest simulated tilt of a loaded foot off the plane
     "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
     "error",  # the one-line message of a trial that raised or killed its worker, else empty
 )
@@ -112,6 +113,7 @@ DECIMALS = {  # outcome columns: digits after the point (module doc)
     "compliant_min_margin_mm": 4,
     "unplanned_support_s": 4,
     "predicted_rotation_deg": 5,
+    "simulated_max_tilt_deg": 5,
 }
 HEADER = (",".join(COLUMNS) + "\n").encode()
 # A sweep that names a controller somewhere: one more input, last, so every other
@@ -122,6 +124,7 @@ _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the 
 # before fixed precision: a wall time, and no fidelity columns
 PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
 PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
+_BEFORE_TILT = tuple(c for c in COLUMNS if c != "simulated_max_tilt_deg")  # before 2026-12
 # every finished layout an older slopewalk wrote, which a fresh run may replace:
 # the one with a wall time, then fixed precision without the fidelity columns
 # (with and without the controller column)
@@ -129,6 +132,8 @@ PREVIOUS_LAYOUTS = (
     PREVIOUS_COLUMNS,
     (*COLUMNS[:_FIDELITY], "error"),
     (*COLUMNS[:_FIDELITY], "error", "controller"),
+    _BEFORE_TILT,
+    (*_BEFORE_TILT, "controller"),
 )
 _ID_CHARS = frozenset("0123456789abcdef")
 

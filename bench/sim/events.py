@@ -59,6 +59,18 @@ class Event:
     cause: str
 
 
+def loaded_tilt(recording: Recording, *, weight: float) -> np.ndarray:
+    """Each foot's (left, right) tilt off the plane while loaded [rad], (m, 2); 0 unloaded.
+
+    The angle between the sole's normal and the plane's, on the rows where the foot
+    carries more than ``LOADED_FRACTION`` of ``weight`` [N]: how far the support
+    turns about an edge (``tip`` past ``TIP_ANGLE``).
+    """
+    s = recording.sensors
+    tilt = np.arccos(np.clip(s.foot_normal[..., 2], -1.0, 1.0))
+    return np.where(s.foot_force[..., 2] > LOADED_FRACTION * weight, tilt, 0.0)
+
+
 def detect(recording: Recording, *, weight: float, hip_height: float) -> list[Event]:
     """All events of a recording, first occurrence per foot / actuator / kind, by time.
 
@@ -70,10 +82,11 @@ def detect(recording: Recording, *, weight: float, hip_height: float) -> list[Ev
     s, t = recording.sensors, recording.t
     events = []
     loaded = s.foot_force[..., 2] > LOADED_FRACTION * weight  # (m, 2)
+    tilts = loaded_tilt(recording, weight=weight)
     for foot in (0, 1):
         events += _slips(t, s.sole[:, foot, :2], loaded[:, foot], _FEET[foot])
-        tilt = np.arccos(np.clip(s.foot_normal[:, foot, 2], -1.0, 1.0))
-        hit = np.flatnonzero(loaded[:, foot] & (tilt > TIP_ANGLE))
+        tilt = tilts[:, foot]
+        hit = np.flatnonzero(tilt > TIP_ANGLE)
         if hit.size:
             k = hit[0]
             events.append(

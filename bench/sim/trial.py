@@ -36,7 +36,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from bench.controllers import check_controller_name
-from bench.sim.events import Event, detect, verdict
+from bench.sim.events import Event, detect, loaded_tilt, verdict
 from bench.sim.model import SceneError, check_scene_options
 from bench.sim.playback import Recording, play
 from bench.sim.prediction import predict_trial
@@ -45,6 +45,7 @@ from planner.joints import stance_swing_to_left_right
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec
 from planner.trajectory import GaitParams
+from planner.verdict import TIP_ANGLE
 from planner.zmp import signed_margin
 
 G = 9.81
@@ -113,6 +114,7 @@ class TrialResult:
     predicted_rotation: float = 0.0  # [rad] largest predicted turn of the support
     unplanned_contact_s: float = 0.0  # [s] foot-time touching where the plan has it lifted
     missed_contact_s: float = 0.0  # [s] foot-time lifted where the plan has it down
+    simulated_max_tilt: float = 0.0  # [rad] largest tilt of a loaded foot off the plane, walk
 
     def scalars(self) -> dict:
         """Everything but the series, strict JSON (angles in degrees at this edge).
@@ -190,7 +192,9 @@ class TrialResult:
             ),
             f"simulated: {self.simulated_verdict:<12} min CoP margin "
             f"{_mm(self.simulated_min_margin):>7} mm, max friction ratio "
-            f"{_num(self.simulated_max_friction_ratio, '.3f')}",
+            f"{_num(self.simulated_max_friction_ratio, '.3f')}, loaded foot tilted up to "
+            f"{np.rad2deg(self.simulated_max_tilt):.2f} deg (tip angle "
+            f"{np.rad2deg(TIP_ANGLE):g} deg)",
             f"ZMP analytic vs simulated: RMS {_mm(self.zmp_rms)} mm, max "
             f"{_mm(self.zmp_max)} mm over {self.standing_fraction:.0%} of the walk",
             f"unplanned support {self.unplanned_support_s:.3f} s (foot-time touching while "
@@ -282,6 +286,8 @@ def compare(
         predict_trial(plan, friction=trial.friction, actuators=trial.actuators) if predict else None
     )
     rows = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(lost, default=np.inf))
+    down = [e.time for e in events if e.kind in ("fall", "diverged")]  # a tip's turn counts
+    rocking = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(down, default=np.inf))
     support = support_difference(plan, recording, rows)
     q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
     q_aim = q_plan if recording.aim_offset is None else q_plan + recording.aim_offset[walk]
@@ -317,6 +323,7 @@ def compare(
         **_predicted_columns(predicted),
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
+        simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
         series={
             "t": tw,
             "zmp_analytic": zmp,

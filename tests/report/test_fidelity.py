@@ -16,7 +16,8 @@ def _row(paper, predicted, simulated, **extra):
         else predicted, "simulated_verdict": simulated, "events": "" if simulated == "stable"
         else simulated, "first_event_time_s": float("nan") if simulated == "stable" else 0.8,
         "analytic_min_margin_mm": -3.0, "compliant_min_margin_mm": -3.2,
-        "predicted_rotation_deg": 1.5, "tracking_rms_deg": 0.3, "unplanned_support_s": 0.1,
+        "predicted_rotation_deg": 1.5, "simulated_max_tilt_deg": 5.4,
+        "tracking_rms_deg": 0.3, "unplanned_support_s": 0.1,
         "zmp_rms_mm": 4.0, "zmp_max_mm": 40.0,
     }  # fmt: skip
     return row | extra
@@ -34,7 +35,7 @@ def test_agreement_counts_walks_against_does_not():
     assert "| predicted | 3/4 | 75.0% |" in text
     assert "### Disagreements of the predicted verdict (1)" in text
     assert "predicted stable, simulated tip (tip, first at 0.80 s)" in text
-    assert "predicted support tilt 1.50°" in text  # the measured quantities, quoted
+    assert "predicted support tilt 1.50°, simulated 5.40°" in text  # measured, quoted
     assert "**rocking short of the tip angle**: predicted stable, simulated tip" in text
 
 
@@ -50,6 +51,16 @@ def test_each_disagreement_gets_its_class():
         predicted_rotation_deg=0.4,
     )  # fmt: skip
     assert cause_class(inside) == "unexplained"
+    # predicted tip, walked: explained only when MuJoCo's support did rock (4.2°, not
+    # the floor's give of a few tenths)
+    over = _row("zmp_outside", "tip", "stable", predicted_rotation_deg=6.9)
+    assert cause_class(over | {"simulated_max_tilt_deg": 4.2}) == (
+        "rocking past the tip angle in the prediction only"
+    )
+    assert cause_class(over | {"simulated_max_tilt_deg": 0.3}) == "unexplained"
+    assert cause_class(over | {"simulated_verdict": "fall"}) != (
+        "rocking past the tip angle in the prediction only"
+    )
 
 
 def test_the_goals_are_reported_where_the_table_has_their_cells():

@@ -18,6 +18,7 @@ from bench.sim.events import (
     TIP_ANGLE,
     Event,
     detect,
+    loaded_tilt,
     verdict,
 )
 from bench.sim.playback import Recording
@@ -105,6 +106,22 @@ def test_a_loaded_foot_tilting_tips_and_an_unloaded_one_does_not():
         Event(243 * DT, "tip", "right foot tilted 5.0 deg off the plane while loaded")
     ]
     assert verdict(events) == "tip"
+
+
+def test_loaded_tilt_is_the_angle_off_the_plane_of_a_loaded_foot_only():
+    base = _standing()
+    normal, force = base["foot_normal"].copy(), base["foot_force"].copy()
+    angle = _ramp(100, 400, np.deg2rad(3.0))  # roll of the right foot, pitch of the left
+    normal[:, 1] = np.column_stack([np.zeros(N), -np.sin(angle), np.cos(angle)])
+    normal[:, 0] = np.column_stack([np.sin(2 * angle), np.zeros(N), np.cos(2 * angle)])
+    force[300:, 0, 2] = 0.1 * WEIGHT  # the left foot unloaded (under 20 %) from 0.3 s
+    recording = Recording(np.arange(N) * DT, np.zeros((N, 8)),
+                          TrialSensors(**_standing(foot_normal=normal, foot_force=force)),
+                          LIMIT, None)  # fmt: skip
+    tilt = loaded_tilt(recording, weight=WEIGHT)
+    np.testing.assert_allclose(tilt[:, 1], angle, atol=1e-12)
+    np.testing.assert_allclose(tilt[:300, 0], 2 * angle[:300], atol=1e-12)
+    assert np.all(tilt[300:, 0] == 0.0)  # 6° off the plane but unloaded: no support tilt
 
 
 def test_falls_by_touch_and_by_pelvis_height():

@@ -16,6 +16,7 @@ from planner.kinematics import rotation_slope_to_world
 from planner.plan import plan_walk
 from planner.spec import default_spec_path
 from planner.trajectory import GaitParams
+from planner.verdict import TIP_ANGLE
 
 
 def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
@@ -47,6 +48,9 @@ def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
     assert early.mean() < 0.05
     assert np.sqrt(np.mean(distance[~early] ** 2)) < 0.004
     assert result.zmp_rms < 0.006
+    # the loaded soles turn only by the floor's give (measured 0.59°), under the fifth of
+    # the tip angle that the fidelity report counts as rocking
+    assert 0.0 < result.simulated_max_tilt < TIP_ANGLE / 5
 
 
 def test_a_played_extended_gait_lands_on_its_planned_footprints(spec):
@@ -76,6 +80,8 @@ def test_fast_walk_falls_where_the_plan_leaves_the_foot(spec):
     result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 0.4)))
     assert result.analytic_verdict == "zmp_outside"
     assert result.simulated_verdict in ("tip", "fall")
+    assert "tip" in [e.kind for e in result.events]  # a foot turns over before the fall
+    assert result.simulated_max_tilt > TIP_ANGLE  # and the measured tilt says so
 
 
 def test_a_trial_without_predictions_simulates_the_same_and_claims_no_verdict(spec):
