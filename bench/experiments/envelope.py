@@ -3,7 +3,7 @@
 The envelope's half; the resumable table run (lock, partial table, resume, worker
 deaths, signals, progress) is the sweep's, ``batch.py``. A run directory holds
 ``envelope.partial.csv`` while a run is going and ``envelope.csv`` when it is
-done (columns: ``envelope_cell.envelope_format(config.controllers)``), then
+done (columns: ``envelope_table.envelope_format(config.controllers)``), then
 ``envelope.png`` and ``boundaries.md`` (per gait family: the fastest flat step time
 and the steepest slopes at 1 s, inside the polygon and walked in MuJoCo); with
 ``record``, ``recordings/<cell_id>.rrd``.
@@ -27,14 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from bench.experiments.batch import Batch, duration, run_batch
-from bench.experiments.envelope_cell import (
-    envelope_format,
-    error_row,
-    is_failure,
-    run_cell,
-    run_cell_search,
-)
+from bench.experiments.envelope_cell import error_row, is_failure, run_cell, run_cell_search
 from bench.experiments.envelope_config import EnvelopeConfig
+from bench.experiments.envelope_table import envelope_format
 
 RECORDINGS_DIR = "recordings"
 FIGURE_NAME = "envelope.png"

@@ -31,7 +31,7 @@ comparison), into the columns ``<gait>_<mode>_<tag>_verdict`` and ``…_zmp_rms_
 ``<cell_id>_<tag>.rrd``, marked with the controller's name.
 
 ``run_cell`` runs in a worker and never raises: a failure is the cell's
-``error`` (verdicts ``error``). The table's columns are ``ENVELOPE``'s; one
+``error`` (verdicts ``error``). The table's columns are ``envelope_table.ENVELOPE``'s; one
 verdict column pair per actuator mode of ``bench.sim.model.ACTUATOR_MODES``, so
 a mode the bench gains joins the table by itself; with controllers,
 ``envelope_format(controllers)`` appends theirs after every other column, so
@@ -48,117 +48,17 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
 from bench.experiments.executor import one_line
-from bench.experiments.sweep_table import SIMULATED_VERDICTS, TableFormat
 from bench.experiments.sweep_trials import TIMESTEP, spec_text
-from bench.sim.model import ACTUATOR_MODES
 from planner.spec import RobotSpec
 
 # (Hz, Szmax, θ1max) and (…, δ, L, w): planner/gait_search.py's FAMILIES
 FAMILIES = ("paper", "extended")
-GAITS = ("maxmargin", "minwork")
 MAX_REPLANS = 256  # distinct candidates tried per gait when the best cannot be planned at 1 ms
 DENSE = 32  # of them, the best ones tried in order before the ranking is sampled
 AGREEMENT_TOL = 1e-6  # [m] a 1 ms plan's margin may not fall further below the GA's
 REPLAN_NOTE = "not re-plannable:"  # the error of a gait passed over, not of a failed cell
-GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
-                "swing_lift_m", "tilt_deg")  # fmt: skip
-# the extended family's parameters (a paper row has its walk's: 0, the nominal L, w of "hold")
-EXTENDED_COLUMNS = ("pelvis_offset_m", "step_length_m", "sway_share")
-
-
-def sim_columns(gait: str, mode: str, tag: str = "") -> tuple[str, str]:
-    """(verdict, ZMP RMS) column names of ``gait`` played in ``mode``, open loop or with
-    the controller of ``tag`` (``controller_tag``)."""
-    policy = f"{mode}_{tag}" if tag else mode
-    return f"{gait}_{policy}_verdict", f"{gait}_{policy}_zmp_rms_mm"
-
-
-def controller_tag(name: str) -> str:
-    """The column tag of controller ``MODULE:CALLABLE``: its callable's name, dots as
-    underscores (``ankle_cop_feedback``)."""
-    return name.partition(":")[2].replace(".", "_")
-
-
-def controller_columns(controllers: tuple[str, ...]) -> tuple[str, ...]:
-    """The columns the controllers add to the table, in every mode of the bench."""
-    tags = [controller_tag(c) for c in controllers]
-    return tuple(
-        c for g in GAITS for m in ACTUATOR_MODES for t in tags for c in sim_columns(g, m, t)
-    )
-
-
-_V1_COLUMNS = (
-    "cell_id",
-    "step_time",  # [s], as written in the envelope file
-    "slope_deg",
-    "friction",
-    "robot",
-    "family",
-    "steps",
-    "population",
-    "generations",
-    "seed",
-    "required_margin_mm",
-    "feasible",  # the max-margin gait has its ZMP inside and every joint within limits
-    *(f"{g}_{c}" for g in GAITS for c in GAIT_COLUMNS),
-    *(c for g in GAITS for m in ACTUATOR_MODES for c in sim_columns(g, m)),
-    "ga_evaluations",
-    "error",
-)
-# Columns: the first version's (paper family only) with each gait's (δ, L, w) after its tilt.
-COLUMNS = tuple(
-    c
-    for col in _V1_COLUMNS
-    for c in (
-        (col, *(f"{col.removesuffix('_tilt_deg')}_{e}" for e in EXTENDED_COLUMNS))
-        if col.endswith("_tilt_deg")
-        else (col,)
-    )
-)
-DECIMALS = {
-    **{f"{g}_{c}": 4 for g in GAITS for c in ("margin_mm", "margin_1ms_mm")},
-    **{f"{g}_work_J": 7 for g in GAITS},
-    **{f"{g}_{c}": 7 for g in GAITS for c in ("hip_height_m", "swing_lift_m")},
-    **{f"{g}_tilt_deg": 5 for g in GAITS},
-    **{f"{g}_{c}": 7 for g in GAITS for c in EXTENDED_COLUMNS},
-    **{sim_columns(g, m)[1]: 4 for g in GAITS for m in ACTUATOR_MODES},
-}
-VERDICTS = ("", *SIMULATED_VERDICTS)  # "": not played (nothing found, or mode not asked)
-ENVELOPE = TableFormat(
-    "envelope",
-    COLUMNS,
-    DECIMALS,
-    {"feasible": ("True", "False", "")}
-    | {sim_columns(g, m)[0]: VERDICTS for g in GAITS for m in ACTUATOR_MODES},
-    previous_layouts=(_V1_COLUMNS,),
-)
-
-
-def envelope_format(controllers: tuple[str, ...] = ()) -> TableFormat:
-    """The table of an envelope whose gaits are also walked by ``controllers``: ``ENVELOPE``
-    and, after its columns, a verdict and ZMP RMS column pair per gait, mode and controller.
-
-    Raises:
-        ValueError: two controllers whose columns would share a name.
-    """
-    if not controllers:
-        return ENVELOPE
-    extra = controller_columns(controllers)
-    if len(set(extra) | set(COLUMNS)) != len(extra) + len(COLUMNS):
-        raise ValueError(
-            f"controllers {', '.join(controllers)}: their callables' names "
-            f"({', '.join(controller_tag(c) for c in controllers)}) must differ (they name the "
-            "table's columns)"
-        )
-    verdicts, rms = extra[0::2], extra[1::2]
-    return TableFormat(
-        "envelope",
-        (*COLUMNS, *extra),
-        DECIMALS | dict.fromkeys(rms, 4),
-        ENVELOPE.verdicts | dict.fromkeys(verdicts, VERDICTS),
-        siblings=((COLUMNS, "its columns are those of an envelope without a controller key"),),
-    )
 
 
 @dataclass(frozen=True)

@@ -39,12 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.envelope_cell import (
-    FAMILIES,
-    EnvelopeCell,
-    SearchSettings,
-    envelope_format,
-)
+from bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
+from bench.experiments.envelope_table import envelope_format
 from bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
 from bench.files import in_package
 from bench.flags import GENERATIONS, POPULATION, SEED

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.experiments.controllers import map_local
-from bench.experiments.envelope_cell import GAITS, controller_tag, sim_columns
+from bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
 from bench.sim.model import ACTUATOR_MODES
 from planner.errors import SlopewalkError
 from planner.spec import RobotSpec

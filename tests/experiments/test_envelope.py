@@ -11,8 +11,9 @@ import pytest
 
 from bench.cli import main
 from bench.experiments.envelope import compare_budgets, convergence_cells
-from bench.experiments.envelope_cell import ENVELOPE, run_cell
+from bench.experiments.envelope_cell import run_cell
 from bench.experiments.envelope_config import envelope_from_dict
+from bench.experiments.envelope_table import ENVELOPE
 from bench.experiments.sweep_table import read_table
 from bench.sim.model import ACTUATOR_MODES
 from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
@@ -237,7 +238,7 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
 def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
     """The plan as a controller (``bench.sim.env:open_loop``) walks as open loop does; the
     ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""
-    from bench.experiments.envelope_cell import envelope_format, sim_columns
+    from bench.experiments.envelope_table import envelope_format, sim_columns
 
     plan_policy = "bench.sim.env:open_loop"
     ankle = "bench.controllers.ankle_cop:ankle_cop_feedback"

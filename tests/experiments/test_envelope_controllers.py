@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.experiments.envelope_cell import ENVELOPE, run_cell
+from bench.experiments.envelope_cell import run_cell
 from bench.experiments.envelope_config import envelope_from_dict
 from bench.experiments.envelope_controllers import (
     EnvelopeTableError,
@@ -14,6 +14,7 @@ from bench.experiments.envelope_controllers import (
     envelope_report,
     table_jobs,
 )
+from bench.experiments.envelope_table import ENVELOPE
 
 PLAN_POLICY = "bench.sim.env:open_loop"
 ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"

@@ -1,0 +1,116 @@
+"""The envelope table's columns: one row per cell, a column group per gait and mode.
+
+``ENVELOPE`` is the ``sweep_table.TableFormat`` of ``envelope.csv``: the cell's
+inputs, then per gait (``GAITS``: max-margin, min-work) whether the GA found it,
+its margins (GA and 1 ms), work and parameters (``GAIT_COLUMNS``, the extended
+family's ``EXTENDED_COLUMNS`` after its tilt), then one verdict and ZMP RMS pair
+per gait and actuator mode of ``bench.sim.model.ACTUATOR_MODES`` (``sim_columns``),
+so a mode the bench gains joins the table by itself. With controllers,
+``envelope_format(controllers)`` appends their pairs after every other column, so
+each open-loop column keeps its place. ``envelope_cell`` fills a row.
+"""
+
+from __future__ import annotations
+
+from bench.experiments.sweep_table import SIMULATED_VERDICTS, TableFormat
+from bench.sim.model import ACTUATOR_MODES
+
+GAITS = ("maxmargin", "minwork")
+GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
+                "swing_lift_m", "tilt_deg")  # fmt: skip
+# the extended family's parameters (a paper row has its walk's: 0, the nominal L, w of "hold")
+EXTENDED_COLUMNS = ("pelvis_offset_m", "step_length_m", "sway_share")
+
+
+def sim_columns(gait: str, mode: str, tag: str = "") -> tuple[str, str]:
+    """(verdict, ZMP RMS) column names of ``gait`` played in ``mode``, open loop or with
+    the controller of ``tag`` (``controller_tag``)."""
+    policy = f"{mode}_{tag}" if tag else mode
+    return f"{gait}_{policy}_verdict", f"{gait}_{policy}_zmp_rms_mm"
+
+
+def controller_tag(name: str) -> str:
+    """The column tag of controller ``MODULE:CALLABLE``: its callable's name, dots as
+    underscores (``ankle_cop_feedback``)."""
+    return name.partition(":")[2].replace(".", "_")
+
+
+def controller_columns(controllers: tuple[str, ...]) -> tuple[str, ...]:
+    """The columns the controllers add to the table, in every mode of the bench."""
+    tags = [controller_tag(c) for c in controllers]
+    return tuple(
+        c for g in GAITS for m in ACTUATOR_MODES for t in tags for c in sim_columns(g, m, t)
+    )
+
+
+_V1_COLUMNS = (
+    "cell_id",
+    "step_time",  # [s], as written in the envelope file
+    "slope_deg",
+    "friction",
+    "robot",
+    "family",
+    "steps",
+    "population",
+    "generations",
+    "seed",
+    "required_margin_mm",
+    "feasible",  # the max-margin gait has its ZMP inside and every joint within limits
+    *(f"{g}_{c}" for g in GAITS for c in GAIT_COLUMNS),
+    *(c for g in GAITS for m in ACTUATOR_MODES for c in sim_columns(g, m)),
+    "ga_evaluations",
+    "error",
+)
+# Columns: the first version's (paper family only) with each gait's (δ, L, w) after its tilt.
+COLUMNS = tuple(
+    c
+    for col in _V1_COLUMNS
+    for c in (
+        (col, *(f"{col.removesuffix('_tilt_deg')}_{e}" for e in EXTENDED_COLUMNS))
+        if col.endswith("_tilt_deg")
+        else (col,)
+    )
+)
+DECIMALS = {
+    **{f"{g}_{c}": 4 for g in GAITS for c in ("margin_mm", "margin_1ms_mm")},
+    **{f"{g}_work_J": 7 for g in GAITS},
+    **{f"{g}_{c}": 7 for g in GAITS for c in ("hip_height_m", "swing_lift_m")},
+    **{f"{g}_tilt_deg": 5 for g in GAITS},
+    **{f"{g}_{c}": 7 for g in GAITS for c in EXTENDED_COLUMNS},
+    **{sim_columns(g, m)[1]: 4 for g in GAITS for m in ACTUATOR_MODES},
+}
+VERDICTS = ("", *SIMULATED_VERDICTS)  # "": not played (nothing found, or mode not asked)
+ENVELOPE = TableFormat(
+    "envelope",
+    COLUMNS,
+    DECIMALS,
+    {"feasible": ("True", "False", "")}
+    | {sim_columns(g, m)[0]: VERDICTS for g in GAITS for m in ACTUATOR_MODES},
+    previous_layouts=(_V1_COLUMNS,),
+)
+
+
+def envelope_format(controllers: tuple[str, ...] = ()) -> TableFormat:
+    """The table of an envelope whose gaits are also walked by ``controllers``: ``ENVELOPE``
+    and, after its columns, a verdict and ZMP RMS column pair per gait, mode and controller.
+
+    Raises:
+        ValueError: two controllers whose columns would share a name.
+    """
+    if not controllers:
+        return ENVELOPE
+    extra = controller_columns(controllers)
+    if len(set(extra) | set(COLUMNS)) != len(extra) + len(COLUMNS):
+        raise ValueError(
+            f"controllers {', '.join(controllers)}: their callables' names "
+            f"({', '.join(controller_tag(c) for c in controllers)}) must differ (they name the "
+            "table's columns)"
+        )
+    verdicts, rms = extra[0::2], extra[1::2]
+    return TableFormat(
+        "envelope",
+        (*COLUMNS, *extra),
+        DECIMALS | dict.fromkeys(rms, 4),
+        ENVELOPE.verdicts | dict.fromkeys(verdicts, VERDICTS),
+        siblings=((COLUMNS, "its columns are those of an envelope without a controller key"),),
+    )
