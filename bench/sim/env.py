@@ -43,7 +43,7 @@ from dm_env import specs
 
 from bench.sim.contact import NON_FOOT_BODIES
 from bench.sim.events import FALL_HEIGHT_FRACTION
-from bench.sim.floor import scene_corner_stiffness
+from bench.sim.floor import SoftFloor
 from bench.sim.model import servo_settings
 from bench.sim.observation import Observer, sensor_indices
 from bench.sim.playback import (
@@ -108,10 +108,8 @@ class TrialEnv(dm_env.Environment):
         self.data = mujoco.MjData(self.model)
         self._initial = initial_state(self.model, self.plan)
         servo = servo_settings(spec, trial.actuators)  # a "_ff" mode's command carries τ_ff / kp
-        floor = scene_corner_stiffness(self.model)  # a "_ff" mode's ankles cancel the give
-        self._t, self._ctrl_ref = control_sequence(
-            self.plan, dt, settle, hold, servo, floor_stiffness=floor
-        )
+        floor = SoftFloor.of_scene(self.model)  # a "_ff" mode answers the floor's give and sink
+        self._t, self._ctrl_ref = control_sequence(self.plan, dt, settle, hold, servo, floor=floor)
         self._settle_rows = int(np.count_nonzero(self._t < 0))
         self._R = rotation_slope_to_world(self.plan.params.slope)
         self._force_limit = servo.force_limit

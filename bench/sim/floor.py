@@ -1,4 +1,4 @@
-"""The floor's give: the stiffness of a sole corner on MuJoCo's soft contact.
+"""The floor's give and sink: a sole's 4 corners on MuJoCo's soft contact.
 
 MuJoCo's contacts are soft constraints. A contact of impedance d, reference
 time constant τ and damping ratio ζ (``solref``), with d from ``solimp`` at its
@@ -9,32 +9,41 @@ penetration r, is solved so that its acceleration obeys
 and its force is f = (a_ref − a₀) / (Â + R), with R = Â (1 − d) / d the solver's
 regulariser and Â the contact's approximate inverse mass, the translational
 ``body_invweight0`` of the foot (the floor, the world, adds none). At rest
-(a = v = 0) the force holding a penetration r is f = k d r / ((1 − d) Â): a
-spring of stiffness
+(a = v = 0) the force holding a penetration r is
 
-    k_c = d² / ((1 − d) Â d_max² τ² ζ²)     [N/m]
+    f(r) = d(r)² r / ((1 − d(r)) Â d_max² τ² ζ²)     [N]   (0 for r ≤ 0)
 
-per contact; a box sole on the plane touches at its four corners. For the
-default robot (τ 0.02 s, ζ 1, d 0.9…0.95 over 1 mm, Â 3.6 kg⁻¹) k_c ≈ 6500 N/m;
-measured from walking trials' flat-foot phases (tilt against the CoP's moment):
-7000–7400 N/m (``tests/sim/test_floor.py`` holds the two together on a standing
-robot). ``planner.tipping`` turns it into the floor's give.
+per contact (``SoftFloor.corner_force``); a box sole on the plane touches at its four
+corners. f / r at a uniformly loaded sole's penetration is the corner stiffness k_c: for the
+default robot (τ 0.02 s, ζ 1, d 0.9…0.95 over 1 mm, Â 3.6 kg⁻¹) k_c ≈ 6700 N/m
+(``tests/sim/test_floor.py`` holds it to the tilt MuJoCo gives a standing robot);
+``planner.tipping`` turns it into the floor's give.
 
-The give fed forward (``give_feedforward``, played by the "_ff" actuator modes): a
-sole loaded by F_n with its CoP p off the centroid m of its 4 corners turns on
-those springs by
+A sole loaded by F_n with its CoP p off the centroid m of its corners sinks and turns
+(``sole_equilibrium``): the penetration of the corner at (x_i, y_i) from m is
+r_i = r₀ − θ_x y_i + θ_y x_i, and (r₀, θ_x, θ_y) solve
 
-    θ_x = −F_n (p_y − m_y) / (k_c w²),   θ_y = F_n (p_x − m_x) / (k_c l²)   [rad]
+    Σ f(r_i) = F_n,   Σ f(r_i) y_i = F_n (p_y − m_y),   Σ f(r_i) x_i = F_n (p_x − m_x)
 
-(rotations of the sole about x_S and y_S; w, l the sole's width and length, so
-k_c w² = 4 k_c (w/2)² is the corners' roll stiffness). Unless the ankle turns the
-other way, the whole robot above the sole turns with it: the stance foot's give
-of 0.3–0.4° in a slow walk tilts the robot towards the swing foot, whose sole,
-~0.1 m away, meets the plane ~1 mm early (~50 ms before the planned touch-down),
-takes half the weight at once and throws the CoP ~40 mm off the planned ZMP.
-Turning each ankle by its foot's give (roll by θ_x, pitch by θ_y / cos(roll), the
-pitch axis sitting on the rolled ankle) keeps the legs, the body and the swing
-foot where the plan has them, so the swing sole lands flat at the planned time.
+(Newton's method from the linear solution θ_x = −F_n (p_y − m_y) / (k_c w²),
+θ_y = F_n (p_x − m_x) / (k_c l²), w, l the sole's width and length). The linear
+solution is not enough in a walk: its CoP sits 80 % of the way to a sole corner late in
+each single support, the inner corners carry almost nothing and the softer d there
+turns the sole 15 % further (7.75 vs 6.74 mrad of roll at 2 s steps, MuJoCo 7.78),
+and the sole point under the ankle sinks 0.10 mm, not the uniform 0.25 mm. The CoP of
+a sole's forces cannot leave the sole, so the offset is held a hair (1e-9 of the half
+size) inside it: where the plan's split puts a foot's share beyond its edge, that foot
+stands on the edge, its far corners just touching.
+
+The give fed forward (``give_feedforward``, played by the "_ff" actuator modes): unless
+the ankle turns the other way, the whole robot above the sole turns with it: the
+stance foot's give of 0.3–0.45° in a slow walk tilts the robot towards the swing foot,
+whose sole, ~0.1 m away, meets the plane ~1 mm early (~50 ms before the planned
+touch-down), takes half the weight at once and throws the CoP ~40 mm off the planned
+ZMP. Turning each ankle by its foot's give (roll by θ_x, pitch by θ_y / cos(roll), the
+pitch axis sitting on the rolled ankle) keeps the legs, the body and the swing foot
+where the plan has them. The sink left (the robot stands lower by the stance sole's
+sink under its ankle) is ``bench.sim.touchdown``'s.
 
 Each foot's load and CoP come from the plan: in single support the stance foot
 carries the whole ground force at the ZMP; in double support each foot carries
@@ -43,16 +52,13 @@ m̄ = Σ F_i m_i / Σ F_i: the shares' moments add up to the planned ZMP's, and 
 is the ZMP itself when a foot carries everything, so the hand-over from foot to
 foot adds no jump (the give jumps only where the planned ZMP does: at the phase
 changes, where the lean's acceleration steps). First order: the sole turns about
-its corners' centroid, the ankle about its axis an ankle height above it (a 0.2 mm
-horizontal shift at 6 mrad for the default robot); the
-sink F_n / 4 k_c (0.23 mm at the whole weight) is not fed forward: lengthening the
-legs by it makes the unloading foot of a double support lose contact (measured:
-unplanned support 0.14 → 1.17 s on flat ground at 2 s steps), because the plan's
-double support asks a foot to slide (``planner.verdict``'s ``foot_slide``) and the
-feet's real shares follow that fight, not the plan's split.
+its corners' centroid, the ankle about its axis an ankle height above it (a 0.25 mm
+horizontal shift at 7.8 mrad for the default robot).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -74,22 +80,67 @@ def impedance(r: float, solimp) -> float:
     return d0 + y * (dmax - d0)
 
 
+@dataclass(frozen=True)
+class SoftFloor:
+    """The foot-floor contact's constants, read from a compiled scene (module doc).
+
+    Attributes:
+        timeconst: ``solref`` time constant τ [s].
+        dampratio: ``solref`` damping ratio ζ [-].
+        solimp: (d0, d_max, width [m], midpoint, power) of the impedance.
+        inverse_mass: Â, the foot's translational ``body_invweight0`` [1/kg].
+    """
+
+    timeconst: float
+    dampratio: float
+    solimp: tuple[float, float, float, float, float]
+    inverse_mass: float
+
+    @classmethod
+    def of_scene(cls, model: mujoco.MjModel) -> SoftFloor:
+        """The constants of a compiled scene's foot contacts (the floor and the feet share
+        ``solref`` and ``solimp``: MuJoCo mixes the two geoms' values; equal, they are these)."""
+        geom = model.geom(FOOT_GEOMS[0])
+        timeconst, dampratio = (float(v) for v in model.geom_solref[geom.id])
+        solimp = tuple(float(v) for v in model.geom_solimp[geom.id][:5])
+        inverse_mass = float(model.body_invweight0[model.geom_bodyid[geom.id], 0])
+        return cls(timeconst, dampratio, solimp, inverse_mass)
+
+    def corner_force(self, r) -> tuple[np.ndarray, np.ndarray]:
+        """Static force f(r) [N] of one corner at penetration ``r`` [m] and df/dr [N/m]."""
+        d0, dmax, width, mid, power = self.solimp
+        r = np.asarray(r, dtype=float)
+        x = np.clip(r / width, 0.0, 1.0)
+        low = x <= mid
+        y = np.where(
+            low, x**power / mid ** (power - 1), 1 - (1 - x) ** power / (1 - mid) ** (power - 1)
+        )
+        dy = np.where(
+            low, power * x ** (power - 1) / mid ** (power - 1),
+            power * (1 - x) ** (power - 1) / (1 - mid) ** (power - 1),
+        )  # fmt: skip
+        dd = np.where((r > 0) & (r < width), (dmax - d0) * dy / width, 0.0)
+        d = d0 + y * (dmax - d0)
+        scale = 1.0 / (self.inverse_mass * dmax**2 * self.timeconst**2 * self.dampratio**2)
+        pressed = r > 0
+        force = np.where(pressed, scale * d**2 * r / (1 - d), 0.0)
+        slope = scale * ((2 * d * dd * r + d**2) * (1 - d) + d**2 * r * dd) / (1 - d) ** 2
+        return force, np.where(pressed, slope, 0.0)
+
+
 def corner_stiffness(model: mujoco.MjModel, weight: float) -> float:
     """k_c [N/m] of one sole corner of the compiled scene, loaded by a quarter of ``weight`` [N].
 
-    The impedance is taken at the corner's static penetration (a fixed point: the
-    penetration sets d, d the stiffness); the floor and the feet share ``solref`` and
-    ``solimp`` (MuJoCo mixes the two geoms' values; with equal values they are these).
+    f / r at the corner's static penetration (a fixed point: the penetration sets d, d
+    the stiffness), with ``SoftFloor.of_scene``'s constants.
     """
-    geom = model.geom(FOOT_GEOMS[0])
-    timeconst, dampratio = model.geom_solref[geom.id]
-    solimp = model.geom_solimp[geom.id]
-    inverse_mass = model.body_invweight0[model.geom_bodyid[geom.id], 0]
-    dmax = float(solimp[1])
+    floor = SoftFloor.of_scene(model)
+    d0, dmax = floor.solimp[:2]
+    scale = 1.0 / (floor.inverse_mass * dmax**2 * floor.timeconst**2 * floor.dampratio**2)
     r, stiffness = 0.0, 0.0
     for _ in range(20):
-        d = impedance(r, solimp)
-        stiffness = d**2 / ((1 - d) * inverse_mass * dmax**2 * timeconst**2 * dampratio**2)
+        d = impedance(r, floor.solimp)
+        stiffness = scale * d**2 / (1 - d)
         r_next = weight / 4 / stiffness
         if abs(r_next - r) < 1e-9:
             break
@@ -101,6 +152,41 @@ def scene_corner_stiffness(model: mujoco.MjModel) -> float:
     """``corner_stiffness`` of a compiled scene under the robot's own weight."""
     mass = float(np.sum(model.body_mass))
     return corner_stiffness(model, mass * G)
+
+
+def sole_equilibrium(
+    floor: SoftFloor, load, offset, *, length: float, width: float, iterations: int = 50
+) -> np.ndarray:
+    """(r₀ [m], θ_x [rad], θ_y [rad]) of soles at rest on their 4 corners, (n, 3) (module doc).
+
+    Args:
+        load: Normal load F_n of each sole [N], (n,); ≤ 0: in the air, all zero.
+        offset: Its CoP from the corners' centroid, (x, y) in the sole's axes [m], (n, 2);
+            held a hair inside the sole.
+        length, width: The sole's size l, w [m].
+    """
+    load = np.asarray(load, dtype=float)
+    half = np.array([length, width]) / 2 * (1 - 1e-9)
+    offset = np.clip(np.asarray(offset, dtype=float), -half, half)
+    x = np.array([1, 1, -1, -1]) * length / 2
+    y = np.array([1, -1, 1, -1]) * width / 2
+    moments = np.stack([np.ones(4), y, x])  # (3, 4): Σf, Σf y, Σf x of the corner forces
+    turns = np.stack([np.ones(4), -y, x], axis=1)  # (4, 3): ∂r_i / ∂(r₀, θ_x, θ_y)
+    target = load[:, None] * np.column_stack([np.ones_like(load), offset[:, 1], offset[:, 0]])
+    loaded = load > 0
+    k = floor.corner_force(2.5e-4)[0] / 2.5e-4  # a linear start, at a typical penetration
+    u = np.column_stack([load / 4, -target[:, 1] / width**2, target[:, 2] / length**2]) / k
+    u[~loaded] = 0.0
+    for _ in range(iterations):
+        force, slope = floor.corner_force(u @ turns.T)  # (n, 4) each
+        residual = force @ moments.T - target
+        if not np.any(np.abs(residual[loaded]) > 1e-12 * np.maximum(load[loaded, None], 1.0)):
+            break
+        jacobian = np.einsum("ki,ni,ij->nkj", moments, slope, turns)
+        jacobian[~loaded] = np.eye(3)
+        residual[~loaded] = 0.0
+        u = u - np.linalg.solve(jacobian, residual[..., None])[..., 0]
+    return u
 
 
 def foot_loads(plan) -> tuple[np.ndarray, np.ndarray]:
@@ -125,33 +211,41 @@ def foot_loads(plan) -> tuple[np.ndarray, np.ndarray]:
     return sole, load
 
 
-def foot_give(plan, corner_stiffness: float) -> np.ndarray:
-    """Planned turn of each sole (left, right) on the soft floor [rad], (n, 2, 2): (θ_x, θ_y).
+def foot_deflection(plan, floor: SoftFloor) -> tuple[np.ndarray, np.ndarray]:
+    """Planned turn and sink of each sole (left, right) on the soft floor, on ``plan.t``.
 
-    Rotations about x_S and y_S of a sole on 4 corner springs of ``corner_stiffness``
-    [N/m] under its planned load and CoP (module doc); zero for a foot in the air.
+    Returns:
+        (θ_x, θ_y) about x_S and y_S [rad], (n, 2, 2), and the sink of the sole point
+        under the ankle along −z_S [m], (n, 2) (``sole_equilibrium`` under each foot's
+        planned load and CoP, module doc); zero for a foot in the air.
     """
     spec = plan.spec
     sole, load = foot_loads(plan)
-    centroid = sole + np.array([(spec.ankle_to_toe - spec.heel_offset) / 2, 0.0])
+    ahead = (spec.ankle_to_toe - spec.heel_offset) / 2  # the centroid ahead of the sole point
+    centroid = sole + np.array([ahead, 0.0])
     total = load.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.einsum("nf,nfi->ni", load, centroid) / total[:, None]
     offset = np.where(total[:, None] > 0, plan.zmp - mean, 0.0)  # p_i − m_i, the same for both
-    theta_x = -load * offset[:, None, 1] / (corner_stiffness * spec.foot_width**2)
-    theta_y = load * offset[:, None, 0] / (corner_stiffness * spec.foot_length**2)
-    return np.stack([theta_x, theta_y], axis=-1)
+    turn = np.zeros((plan.t.size, 2, 2))
+    sink = np.zeros((plan.t.size, 2))
+    for foot in (0, 1):
+        r0, theta_x, theta_y = sole_equilibrium(
+            floor, load[:, foot], offset, length=spec.foot_length, width=spec.foot_width
+        ).T
+        turn[:, foot] = np.column_stack([theta_x, theta_y])
+        sink[:, foot] = r0 - theta_y * ahead  # the sole point sits `ahead` behind the centroid
+    return turn, sink
 
 
-def give_feedforward(plan, corner_stiffness: float) -> np.ndarray:
+def give_feedforward(plan, turn: np.ndarray) -> np.ndarray:
     """Ankle turns that cancel each sole's give, MJCF joint order [rad], (n, 8) on ``plan.t``.
 
-    Ankle roll by θ_x and ankle pitch by θ_y / cos(roll) of ``foot_give`` (module doc);
-    the hips and knees are left as planned.
+    Ankle roll by θ_x and ankle pitch by θ_y / cos(roll) of ``turn`` (``foot_deflection``'s
+    (n, 2, 2), module doc); the hips and knees are left as planned.
     """
-    give = foot_give(plan, corner_stiffness)
     roll = plan.q_left_right[:, [3, 7]]  # (n, 2) ankle rolls, left and right
     out = np.zeros((plan.t.size, 8))
-    out[:, [2, 6]] = give[..., 1] / np.cos(roll)
-    out[:, [3, 7]] = give[..., 0]
+    out[:, [2, 6]] = turn[..., 1] / np.cos(roll)
+    out[:, [3, 7]] = turn[..., 0]
     return out

@@ -13,9 +13,11 @@ rows are computed in each step's forward pass, i.e. row k describes the state at
 the start of step k; that is the time base used here.
 
 Feedforward modes ("_ff") command more than the planned angles: the plan's torque
-over kp (``feedforward_torque``), and the ankle turns that cancel the soft floor's
-give (``floor.give_feedforward``, for the compiled scene's corner stiffness), so the
-robot stays where the plan has it and the swing sole lands at the planned time.
+over kp (``feedforward_torque``), and the soft floor's deflection under the planned
+loads (``floor_feedforward``, for the compiled scene's contact): the ankles turned
+against each sole's give (``floor.give_feedforward``), so the robot stays where the plan
+has it, and the legs shortened by the soles' sink (``touchdown``), so the swing sole
+lands at the planned touch-down with the plan's zero normal velocity.
 
 Divergence: when MuJoCo meets a bad acceleration it warns and resets the state,
 which shows as the rollout's time running backwards; the recording is cut there
@@ -31,8 +33,9 @@ import numpy as np
 from mujoco import rollout
 
 from bench.sim.contact import TrialSensors, add_trial_sensors, decode
-from bench.sim.floor import give_feedforward, scene_corner_stiffness
+from bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
 from bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
+from bench.sim.touchdown import leg_offsets, leg_shortening
 from planner.joints import stance_swing_to_left_right
 from planner.kinematics import Chain, rotation_slope_to_world
 from planner.plan import Plan
@@ -54,9 +57,9 @@ class Recording:
         force_limit: Actuator torque limit [N m].
         diverged_at: Time the simulation blew up [s], or None.
         aim_offset: What the command aims the joints at beyond the planned angles, MJCF
-            order [rad], (m, 8): a feedforward mode's ankle turns against the floor's give
-            (``commands_and_aim``); None: the planned angles themselves (also for a closed-loop
-            controller, whose own aim is not known here).
+            order [rad], (m, 8): a feedforward mode's answer to the floor's give and sink
+            (``floor_feedforward``); None: the planned angles themselves (also for a
+            closed-loop controller, whose own aim is not known here).
     """
 
     t: np.ndarray
@@ -108,21 +111,21 @@ def control_sequence(
     hold: float,
     servo: Servo | None = None,
     *,
-    floor_stiffness: float | None = None,
+    floor: SoftFloor | None = None,
 ):
     """Row times [s] (walk starts at 0) and commands, MJCF order, (m, 8).
 
     The command is the planned angle [rad], linearly interpolated to the rows; with a
     feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``, held at its
     first and last value while settling and holding), which adds τ_ff to the actuator's
-    force (``model.Servo``), and, on a soft floor, its ankles turned against the soles'
-    give (``floor.give_feedforward``).
+    force (``model.Servo``), and, on a soft floor, by the floor's give and sink
+    (``floor_feedforward``).
 
     Args:
-        floor_stiffness: k_c of each sole corner of the scene's floor [N/m]
-            (``floor.scene_corner_stiffness``); None: a rigid floor, no give to cancel.
+        floor: The scene's foot contact (``floor.SoftFloor.of_scene``); None: a rigid
+            floor, nothing to cancel.
     """
-    t, q_ref, _ = commands_and_aim(plan, timestep, settle, hold, servo, floor_stiffness)
+    t, q_ref, _ = commands_and_aim(plan, timestep, settle, hold, servo, floor)
     return t, q_ref
 
 
@@ -132,20 +135,31 @@ def commands_and_aim(
     settle: float,
     hold: float,
     servo: Servo | None = None,
-    floor_stiffness: float | None = None,
+    floor: SoftFloor | None = None,
 ):
     """``control_sequence``'s row times and commands, and what the command aims the joints
-    at beyond the plan on those rows (the ankles' turn against the give), MJCF order [rad],
-    (m, 8): None where the mode aims at the plan itself (no feedforward, or a rigid floor)."""
+    at beyond the plan on those rows (``floor_feedforward``), MJCF order [rad], (m, 8): None
+    where the mode aims at the plan itself (no feedforward, or a rigid floor)."""
     t = _rows(plan, timestep, settle, hold)
     q_ref = on_rows(t, plan, plan.q_left_right)
     aim = None
     if servo is not None and servo.feedforward:
         q_ref += on_rows(t, plan, feedforward_torque(plan, servo)) / servo.kp
-        if floor_stiffness is not None:
-            aim = on_rows(t, plan, give_feedforward(plan, floor_stiffness))
+        if floor is not None:
+            aim = on_rows(t, plan, floor_feedforward(plan, floor))
             q_ref += aim
     return t, q_ref, aim
+
+
+def floor_feedforward(plan: Plan, floor: SoftFloor, *, touchdown: bool = True) -> np.ndarray:
+    """Joint offsets that answer the soft floor's deflection, MJCF order [rad], (n, 8) on
+    ``plan.t``: the ankles turned against each sole's give (``floor.give_feedforward``)
+    and, with ``touchdown``, the legs shortened by the soles' sink (``touchdown``)."""
+    turn, sink = foot_deflection(plan, floor)
+    out = give_feedforward(plan, turn)
+    if touchdown:
+        out += leg_offsets(plan, leg_shortening(plan, sink))
+    return out
 
 
 def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray:
@@ -230,7 +244,7 @@ def play_many(
         first = plans[members[0]]
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
-        floor = scene_corner_stiffness(model)
+        floor = SoftFloor.of_scene(model)
         controls, aims, states, times = [], [], [], None
         for i in members:
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)

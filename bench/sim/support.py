@@ -10,6 +10,9 @@ samples where the robot still stands:
   air (early touch-down, late lift-off, a swing foot striking the plane);
 * ``missed_contact_s``: foot-time in the air where the plan has it on the plane;
 * their sum, ``unplanned_support_s`` (both feet counted, so at most 2 × the time).
+
+``touch_downs`` times each swing foot's landing: its first contact after it left the
+plane, from the planned touch-down, and its sole point's normal velocity there.
 """
 
 from __future__ import annotations
@@ -60,3 +63,36 @@ def support_difference(plan: Plan, recording: Recording, standing: np.ndarray) -
     extra = (contact & ~planned & rows).sum() * dt
     missed = (~contact & planned & rows).sum() * dt
     return Support(float(extra), float(missed))
+
+
+def touch_downs(plan: Plan, recording: Recording) -> tuple[np.ndarray, np.ndarray]:
+    """Each step's landing: first contact from the planned touch-down [s] (< 0: early) and
+    the sole point's velocity along z_S there [m/s] (< 0: descending), (steps,) each.
+
+    The swing foot of step k leaves the plane at its planned lift-off or later; its first
+    contact is the first row with a normal force after its first row without one. The
+    velocity is the sole point's backward difference into that row. NaN where the foot
+    never left or never landed again.
+    """
+    params = plan.params
+    dsp = (1 - params.ssp_fraction) * params.step_time
+    load = recording.sensors.foot_force[..., 2] > 0.0
+    height = recording.sensors.sole[..., 2]
+    t = recording.t
+    early = np.full(params.steps, np.nan)
+    speed = np.full(params.steps, np.nan)
+    for k in range(params.steps):
+        lift_off = k * params.step_time + dsp
+        mid_swing = lift_off + params.ssp_fraction * params.step_time / 2
+        stance = plan.stance[min(np.searchsorted(plan.t, mid_swing), plan.t.size - 1)]
+        swing = 1 if stance == LEFT else 0
+        air = np.flatnonzero((t >= lift_off) & ~load[:, swing])
+        if not air.size:
+            continue
+        landed = np.flatnonzero((t > t[air[0]]) & load[:, swing])
+        if not landed.size:
+            continue
+        row = landed[0]
+        early[k] = t[row] - (k + 1) * params.step_time
+        speed[k] = (height[row, swing] - height[row - 1, swing]) / (t[row] - t[row - 1])
+    return early, speed

@@ -13,8 +13,8 @@ walk's time base, their RMS and max distance over the samples where the robot
 stands (before any tip or fall, both values finite), the margin of each to the
 planned support polygon, both verdicts, the events, the required friction ratio
 against μ, and planned vs simulated joint angles. Joint tracking is measured from
-the angles the playback aims at (``Recording.aim_offset``): the planned ones, plus the
-ankle turns a feedforward mode adds to cancel the floor's give.
+the angles the playback aims at (``Recording.aim_offset``): the planned ones, plus what
+a feedforward mode adds against the floor's give and sink (ankle turns, shorter legs).
 
 Analytic verdicts (``prediction.py``): the paper's, ``analytic_verdict``: ``stable``
 when the planned ZMP stays inside the support polygon at every sample, else

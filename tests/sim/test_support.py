@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bench.sim.playback import play
-from bench.sim.support import planned_contact, support_difference
+from bench.sim.support import planned_contact, support_difference, touch_downs
 from bench.sim.trial import TrialSpec, run_trial
 from planner.plan import plan_walk
 from planner.trajectory import GaitParams
@@ -52,3 +52,21 @@ def test_the_slow_walk_touches_down_early(spec, walk):
     assert 0.04 < result.unplanned_contact_s < 0.4
     assert result.missed_contact_s < 0.02
     assert result.scalars()["unplanned_support_s"] == pytest.approx(result.unplanned_support_s)
+
+
+def test_touch_downs_time_each_landing_and_its_speed(walk):
+    """Contacts as planned: each landing at its planned DSP start; the swing foot down
+    20 ms early: −20 ms; its sole descending at 3 mm/s: −3 mm/s there."""
+    plan, rec = walk
+    planned = planned_contact(plan, rec.t)
+    force = rec.sensors.foot_force.copy()
+    force[..., 2] = np.where(planned, 1.0, 0.0)
+    sole = rec.sensors.sole.copy()
+    sole[..., 2] = -0.003 * rec.t[:, None]
+    exact = replace(rec, sensors=replace(rec.sensors, foot_force=force, sole=sole))
+    early, speed = touch_downs(plan, exact)
+    np.testing.assert_allclose(early, 0.0, atol=1e-9)
+    np.testing.assert_allclose(speed, -0.003, rtol=1e-6)
+    force[(rec.t >= 1.98) & (rec.t < 2.0), 0, 2] = 1.0  # the left foot lands 20 ms early
+    sooner = replace(rec, sensors=replace(rec.sensors, foot_force=force, sole=sole))
+    np.testing.assert_allclose(touch_downs(plan, sooner)[0], [-0.02, 0.0], atol=1e-9)
