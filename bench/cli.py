@@ -340,10 +340,10 @@ def build_parser() -> argparse.ArgumentParser:
         "cop-error",
         "the flat slow walk's simulated CoP vs analytic ZMP, taken apart by phase and cause",
         "Play flat ground at 2 s steps (the default robot, mu 1) in the stiff modes, with and "
-        "without the floor's give fed forward, and with stiffer contacts and finer time "
-        "steps, and write a markdown report of the CoP - ZMP distance by phase window, the "
-        "touch-down timing, the plan's ZMP jumps at phase changes and the double support's "
-        "foot slide.",
+        "without the floor's give and sink fed forward, and with stiffer contacts and finer "
+        "time steps, and write a markdown report of the CoP - ZMP distance by phase window, "
+        "the touch-down timing and speed, the unplanned support, the servo's sag, the plan's "
+        "ZMP jumps at phase changes and the double support's foot slide.",
         "slopewalk cop-error --out results/cop_error.md",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="markdown report")

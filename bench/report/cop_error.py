@@ -9,10 +9,17 @@ where the robot stands) apart:
   support that starts with a touch-down, and the rest of each phase; per window its
   share of the samples, RMS, max and share of the mean square (the windows partition
   the samples, so the shares add up to the total);
-* the cases: ``stiff`` (positions only), ``stiff`` with only the floor's give fed forward
-  (``floor.give_feedforward``, no torque), ``stiff_ff`` (torque and give), and ``stiff_ff``
-  with its ankles aimed as on a rigid floor (torque only), with each swing foot's first
-  contact against the planned touch-down;
+* the cases: ``stiff`` (positions only), ``stiff`` with the floor's give and sink fed
+  forward (``playback.floor_feedforward``, no torque), ``stiff_ff`` (torque, give and sink:
+  the swing sole lands at the planned touch-down, ``bench.sim.touchdown``), ``stiff_ff``
+  with the give fed forward but not the sink, and ``stiff_ff`` with its ankles aimed as
+  on a rigid floor (torque only); per case each swing foot's first contact against the
+  planned touch-down and its normal velocity there (``support.touch_downs``), and the
+  unplanned support split into foot-time touching while planned lifted and lifted while
+  planned down, the latter on the landing and the unloading foot of each double support;
+* the servo's sag in ``stiff``: the stance leg's joints late in single support lag their
+  command by (τ + kv q̇) / kp, which a positions-only mode keeps (``stiff_ff`` feeds it
+  forward);
 * the plan's own ZMP jumps at the phase changes (its lean's cubic changes λ̈ there);
 * the soft contact: the same walks with MuJoCo's contact time constant (``solref``,
   0.02 s by default) and time step made smaller (a stiffer floor, finer steps);
@@ -29,7 +36,8 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from bench.sim.floor import give_feedforward, scene_corner_stiffness
+from bench.report.landing import landing_section
+from bench.sim.floor import SoftFloor
 from bench.sim.model import servo_settings
 from bench.sim.playback import (
     HOLD_TIME,
@@ -37,10 +45,12 @@ from bench.sim.playback import (
     Recording,
     build_model,
     commands_and_aim,
+    floor_feedforward,
     initial_state,
     on_rows,
     recording_from_rollout,
 )
+from bench.sim.support import touch_downs
 from bench.sim.trial import TrialResult, TrialSpec, compare
 from planner.joints import LEFT
 from planner.kinematics import rotation_slope_to_world
@@ -50,12 +60,14 @@ from planner.trajectory import GaitParams
 
 WINDOW = 0.05  # [s] the transient after / before a phase change
 STEP_TIME, FRICTION, STEPS = 2.0, 1.0, 4
-# (actuator mode, give fed forward (None: as the mode does), label)
+# (actuator mode, the floor fed forward (None: as the mode does), label); the floor's
+# feedforward: "rigid" none, "give" the ankles' turns, "sink" the give and the sink
 CASES = (
     ("stiff", None, "stiff"),
-    ("stiff", True, "stiff, only the give fed forward"),
+    ("stiff", "sink", "stiff, the floor's give and sink fed forward"),
     ("stiff_ff", None, "stiff_ff"),
-    ("stiff_ff", False, "stiff_ff, ankles aimed as on a rigid floor"),
+    ("stiff_ff", "give", "stiff_ff, the give fed forward, not the sink"),
+    ("stiff_ff", "rigid", "stiff_ff, ankles aimed as on a rigid floor"),
 )
 # (solref time constant [s], time step [s]); MuJoCo keeps the time constant ≥ 2 steps
 CONTACTS = ((0.02, 0.001), (0.02, 0.00025), (0.01, 0.0005), (0.005, 0.00025), (0.002, 0.00025))
@@ -81,7 +93,7 @@ def simulate(
     plan: Plan,
     actuators: str,
     *,
-    give: bool | None = None,
+    floor_ff: str | None = None,
     timeconst: float | None = None,
     timestep: float = 0.001,
 ) -> Recording:
@@ -89,19 +101,23 @@ def simulate(
     ``timeconst`` [s] and step ``timestep`` [s].
 
     Args:
-        give: Feed the floor's give forward at the ankles (True, also in a mode without
-            feedforward), not at all (False), or as the mode does (None).
+        floor_ff: What of the floor's deflection the command answers, also in a mode
+            without feedforward: "rigid" nothing, "give" the ankles turned against each
+            sole's give, "sink" that and the legs shortened by the soles' sink
+            (``playback.floor_feedforward``); None: as the mode does ("sink" in a "_ff"
+            mode, "rigid" otherwise).
     """
     model = build_model(plan, friction=FRICTION, actuators=actuators, timestep=timestep)
     if timeconst is not None:
         model.geom_solref[:, 0] = timeconst  # floor and feet: the contact's is theirs
     servo = servo_settings(plan.spec, actuators)
-    floor = scene_corner_stiffness(model)
+    floor = SoftFloor.of_scene(model)
+    own = "sink" if servo.feedforward else "rigid"
     t, q_ref, aim = commands_and_aim(
-        plan, timestep, SETTLE_TIME, HOLD_TIME, servo, None if give is False else floor
+        plan, timestep, SETTLE_TIME, HOLD_TIME, servo, floor if floor_ff in (None, own) else None
     )
-    if give and not servo.feedforward:  # the give alone, in a mode that feeds nothing forward
-        aim = on_rows(t, plan, give_feedforward(plan, floor))
+    if floor_ff not in (None, own, "rigid"):
+        aim = on_rows(t, plan, floor_feedforward(plan, floor, touchdown=floor_ff == "sink"))
         q_ref = q_ref + aim
     state, sensordata = rollout.rollout(
         model, mujoco.MjData(model), initial_state(model, plan), q_ref[None]
@@ -153,22 +169,6 @@ def by_window(case: Case, plan: Plan) -> list[tuple[str, float, float, float, fl
     return rows
 
 
-def first_contacts(plan: Plan, recording: Recording) -> np.ndarray:
-    """Each swing foot's first contact after lift-off, from its planned touch-down [s]."""
-    load = recording.sensors.foot_force[..., 2] > 0
-    dsp = (1 - plan.params.ssp_fraction) * plan.params.step_time
-    out = []
-    for k in range(plan.params.steps):
-        touch_down = (k + 1) * plan.params.step_time
-        stance = plan.stance[np.searchsorted(plan.t, touch_down - dsp)]
-        swing = 1 if stance == LEFT else 0
-        rows = np.flatnonzero(
-            (recording.t > k * plan.params.step_time + dsp + WINDOW) & load[:, swing]
-        )
-        out.append(recording.t[rows[0]] - touch_down if rows.size else np.nan)
-    return np.array(out)
-
-
 def zmp_jumps(plan: Plan) -> tuple[float, float, float]:
     """Largest jump of the planned ZMP at a lift-off and at a touch-down, and the
     median change from one sample to the next elsewhere [m]."""
@@ -203,7 +203,7 @@ def double_support_slide(plan: Plan, case: Case) -> tuple[float, float, float]:
 def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
     """Markdown of the flat 2 s walk's CoP error, decomposed (module doc)."""
     plan = plan_walk(spec, GaitParams.nominal(spec, STEP_TIME, steps=STEPS))
-    cases = [run_case(plan, mode, label, give=give) for mode, give, label in CASES]
+    cases = [run_case(plan, mode, label, floor_ff=ff) for mode, ff, label in CASES]
     lines = ["# CoP error on flat ground: where the simulated CoP leaves the analytic ZMP", ""]
     if command:
         lines += [f"Written by `{command}`.", ""]
@@ -212,17 +212,33 @@ def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
         "of `slopewalk trial` (simulated CoP vs analytic ZMP while the robot stands). "
         "Module doc of `bench/report/cop_error.py` for each quantity.",
         "",
-        "| case | RMS [mm] | max [mm] | unplanned support [s] | first contact vs planned "
-        "touch-down [ms] | joint tracking [°] |",
-        "|---|---|---|---|---|---|",
+        "| case | RMS [mm] | max [mm] | unplanned support [s] (touching / lifted) | first "
+        "contact vs planned touch-down [ms] | normal velocity there [mm/s] | joint tracking [°] |",
+        "|---|---|---|---|---|---|---|",
     ]
     for c in cases:
-        early = first_contacts(plan, c.recording) * 1e3
+        early, speed = touch_downs(plan, c.recording)
+        r = c.result
         lines.append(
-            f"| {c.label} | {c.result.zmp_rms * 1e3:.2f} | {c.result.zmp_max * 1e3:.1f} | "
-            f"{c.result.unplanned_support_s:.3f} | {np.nanmean(early):+.0f} | "
-            f"{np.rad2deg(c.result.tracking_rms):.2f} |"
+            f"| {c.label} | {r.zmp_rms * 1e3:.2f} | {r.zmp_max * 1e3:.1f} | "
+            f"{r.unplanned_support_s:.3f} ({r.unplanned_contact_s:.3f} / "
+            f"{r.missed_contact_s:.3f}) | {np.nanmean(early) * 1e3:+.0f} | "
+            f"{np.nanmean(speed) * 1e3:+.1f} | {np.rad2deg(r.tracking_rms):.2f} |"
         )
+    fed, plain = cases[2], cases[0]
+    lost = [e.time for e in fed.result.events if e.kind in ("tip", "fall", "diverged")]
+    lines += landing_section(plan, fed.recording, min(lost, default=np.inf), plain.recording)
+    late = {c.label: {n: r for n, _, r, _, _ in by_window(c, plan)} for c in cases[2:4]}
+    on_time, early = (late[c.label] for c in cases[2:4])
+    lines += [
+        "",
+        f"Against {cases[3].label}, landing on time moves error out of the last 50 ms before "
+        f"touch-down ({early[WINDOWS[2]] * 1e3:.2f} → {on_time[WINDOWS[2]] * 1e3:.2f} mm) into "
+        f"the double support ({early[WINDOWS[4]] * 1e3:.2f} → {on_time[WINDOWS[4]] * 1e3:.2f} "
+        f"mm; RMS {cases[3].result.zmp_rms * 1e3:.2f} → {fed.result.zmp_rms * 1e3:.2f} mm), and "
+        f"its unplanned support from touching early to a landing foot in the air "
+        f"({cases[3].result.unplanned_support_s:.3f} → {fed.result.unplanned_support_s:.3f} s).",
+    ]
     for c in cases:
         lines += [
             "",

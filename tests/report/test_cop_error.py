@@ -58,6 +58,7 @@ def test_the_windows_share_out_the_whole_mean_square(plan):
 def test_the_report_names_its_command_and_every_case(spec):
     text = cop_error_report(spec, command="slopewalk cop-error --out x.md")
     assert "Written by `slopewalk cop-error --out x.md`" in text
-    for label in ("| stiff |", "| stiff_ff |", "ankles aimed as on a rigid floor"):
+    for label in ("| stiff |", "| stiff_ff |", "ankles aimed as on a rigid floor", "not the sink"):
         assert label in text
+    assert "## Touch-down" in text
     assert "## Double support: the plan moves a loaded foot" in text
