@@ -38,6 +38,7 @@ import mujoco
 import numpy as np
 from dm_env import specs
 
+from bench.sim import playback
 from bench.sim.contact import FOOT_GEOMS, MAX_CONTACTS
 from planner.joints import MJCF_JOINTS, SIDE_PREFIX, stance_swing_to_left_right
 from planner.kinematics import rotation_slope_to_world
@@ -96,8 +97,7 @@ class Observer:
         plan = self.plan
 
         def on_rows(x):
-            x = np.asarray(x, float).reshape(plan.t.size, -1)
-            return np.column_stack([np.interp(t, plan.t, x[:, j]) for j in range(x.shape[1])])
+            return playback.on_rows(t, plan, x)
 
         idx = np.clip(np.searchsorted(plan.t, t), 0, plan.t.size - 1)
         stance = plan.stance[idx]

@@ -168,7 +168,9 @@ def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray
 
 
 def on_rows(t: np.ndarray, plan: Plan, x: np.ndarray) -> np.ndarray:
-    """``x`` (n, 8) on ``plan.t`` interpolated to the rows ``t``, ends held."""
+    """``x`` (n, ...) on ``plan.t`` interpolated to the rows ``t``, ends held: (m, k), k the
+    product of ``x``'s trailing dimensions (1 for a series of scalars)."""
+    x = np.asarray(x, float).reshape(plan.t.size, -1)
     return np.column_stack([np.interp(t, plan.t, x[:, j]) for j in range(x.shape[1])])
 
 

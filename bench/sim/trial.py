@@ -38,7 +38,7 @@ import numpy as np
 from bench.controllers import check_controller_name
 from bench.sim.events import Event, detect, loaded_tilt, verdict
 from bench.sim.model import SceneError, check_scene_options
-from bench.sim.playback import Recording, play
+from bench.sim.playback import Recording, on_rows, play
 from bench.sim.prediction import predict_trial
 from bench.sim.support import support_difference
 from planner.joints import stance_swing_to_left_right
@@ -270,8 +270,7 @@ def compare(
     tw = t[walk]
 
     def on_walk(x):
-        x = x.reshape(x.shape[0], -1)
-        return np.column_stack([np.interp(tw, plan.t, x[:, j]) for j in range(x.shape[1])])
+        return on_rows(tw, plan, x)
 
     zmp = on_walk(plan.zmp)
     lipm = on_walk(plan.zmp_lipm)
