@@ -224,6 +224,10 @@ def cause_class(r) -> str:
     * servo sway: plain ``servo``, predicted stable, the quasi-static compliance pass
       keeping a positive margin: the servo loop's sway (``planner/servo_loop.py``)
       left too small by the model, while the simulated servo sways and tips;
+    * slip of a rocking sole: predicted stable, simulated slip (no tip, no fall), the
+      loaded sole tilting by more than a fifth of the tip angle (measured): a sole
+      rocking on its edge holds by that edge alone, and slides (the predicted slip
+      compares the planned friction ratio with μ on a flat sole);
     * rocking short of the tip angle: predicted stable, yet the predicted rocking
       turns the support by more than a fifth of the tip angle (it is there, only
       smaller than the simulator's): a landing's impact turning pitch into roll, which
@@ -237,6 +241,8 @@ def cause_class(r) -> str:
     rocked = np.rad2deg(TIP_ANGLE) / 5  # [deg] a turn that is there, not the floor's give
     if walks and r["actuators"] == "servo" and r["compliant_min_margin_mm"] > 0:
         return "servo sway"
+    if walks and r["simulated_verdict"] == "slip" and r["simulated_max_tilt_deg"] > rocked:
+        return "slip of a rocking sole"
     if walks and r["predicted_rotation_deg"] > rocked:
         return "rocking short of the tip angle"
     if (

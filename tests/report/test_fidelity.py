@@ -46,6 +46,10 @@ def test_each_disagreement_gets_its_class():
     assert cause_class(sway) == "servo sway"
     short = _row("zmp_outside", "stable", "tip", predicted_rotation_deg=3.9)
     assert cause_class(short) == "rocking short of the tip angle"
+    # a slip, not a tip: it is the rocking sole's measured tilt that explains it
+    slid = short | {"simulated_verdict": "slip", "events": "slip"}
+    assert cause_class(slid | {"simulated_max_tilt_deg": 4.5}) == "slip of a rocking sole"
+    assert cause_class(slid | {"simulated_max_tilt_deg": 0.5}) != "slip of a rocking sole"
     inside = _row(
         "stable", "stable", "tip", analytic_min_margin_mm=2.0, compliant_min_margin_mm=1.0,
         predicted_rotation_deg=0.4,
