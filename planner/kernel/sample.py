@@ -106,9 +106,10 @@ FRAME = 12 * B
 _FR = _SCALARS
 N_LINK = 9
 # Links 0..8 from _LK, LINK rows each: CoM offset c (3), CoM acceleration − g (3), rate
-# of angular momentum about the CoM (3), the joint axis u (3).
-_C, _A, _H, _U = 0 * B, 3 * B, 6 * B, 9 * B
-LINK = 12 * B
+# of angular momentum about the CoM (3). (Link i's joint axis u_i is ±z of frame i,
+# ``_AXIS_SIGN``: read from the frame, not copied.)
+_C, _A, _H = 0 * B, 3 * B, 6 * B
+LINK = 9 * B
 _LK = _FR + N_LINK * FRAME
 SCRATCH = _LK + N_LINK * LINK
 
@@ -151,7 +152,9 @@ def _cubic(w, col, j, tau):
 @njit(**_KW)
 def _half_tan(sn, c):
     """tan(q/2) from sin q and cos q, in the form without cancellation on each half."""
-    return sn / (1.0 + c) if c >= 0 else (1.0 - c) / sn
+    # one division, its operands chosen (a vector loop would run both of two divisions)
+    num, den = (sn, 1.0 + c) if c >= 0 else (1.0 - c, sn)
+    return num / den
 
 
 @njit(inline="always", **_KW)  # inlined in numba's IR: a call would stop vectorisation
@@ -166,22 +169,24 @@ def _leg(up, uv, ua, wq, wv, wa, l1, l2):
     d2 = up * up + wq * wq
     d = np.sqrt(d2)
     d = d if (d < l1 + l2) and (d > abs(l1 - l2)) else np.nan
-    cpsi, spsi = wq / d, up / d
-    cphi = (l1 * l1 + d * d - l2 * l2) / (2.0 * l1 * d)
+    # one reciprocal per divisor, then products: divisions are the loop's slowest operations
+    inv_d = 1.0 / d
+    cpsi, spsi = wq * inv_d, up * inv_d
+    cphi = (l1 * l1 + d * d - l2 * l2) * (0.5 / l1) * inv_d
     sphi = np.sqrt(1.0 - cphi * cphi)
     cs = cpsi * cphi - spsi * sphi  # β_shank = ψ + φ
     ss = spsi * cphi + cpsi * sphi
     eu, ew = up - l1 * ss, wq - l1 * cs
-    norm = np.sqrt(eu * eu + ew * ew)
-    ct, st = ew / norm, eu / norm
+    inv_norm = 1.0 / np.sqrt(eu * eu + ew * ew)
+    ct, st = ew * inv_norm, eu * inv_norm
     j11, j12, j21, j22 = l1 * cs, l2 * ct, -l1 * ss, -l2 * st
-    det = j11 * j22 - j12 * j21
-    vs = (j22 * uv - j12 * wv) / det
-    vt = (-j21 * uv + j11 * wv) / det
+    inv_det = 1.0 / (j11 * j22 - j12 * j21)
+    vs = (j22 * uv - j12 * wv) * inv_det
+    vt = (-j21 * uv + j11 * wv) * inv_det
     ru = ua + (l1 * ss * vs * vs + l2 * st * vt * vt)
     rw = wa + (l1 * cs * vs * vs + l2 * ct * vt * vt)
-    as_ = (j22 * ru - j12 * rw) / det
-    at = (-j21 * ru + j11 * rw) / det
+    as_ = (j22 * ru - j12 * rw) * inv_det
+    at = (-j21 * ru + j11 * rw) * inv_det
     return cs, ss, vs, as_, ct, st, vt, at, np.sqrt(d2), cphi, eu, ew
 
 
@@ -421,9 +426,6 @@ def _link(i, com, inertia, n, w):
         w[lk + _H + j] = r00 * ld0 + r01 * ld1 + r02 * ld2 + wy * iw2 - wz * iw1
         w[lk + _H + B + j] = r10 * ld0 + r11 * ld1 + r12 * ld2 + wz * iw0 - wx * iw2
         w[lk + _H + 2 * B + j] = r20 * ld0 + r21 * ld1 + r22 * ld2 + wx * iw1 - wy * iw0
-        w[lk + _U + j] = sign * r02
-        w[lk + _U + B + j] = sign * r12
-        w[lk + _U + 2 * B + j] = sign * r22
 
 
 @njit(**_KW)
@@ -494,7 +496,7 @@ def _inward(mass, n, w):
 def _backward(i, mass, n, w):
     """Link i of the inward recursion: force and moment at origin i, m · u_i, eq. (4) sums."""
     n = min(n, B)  # a bound on the trip count (module doc)
-    m_i = mass[i]
+    m_i, sign = mass[i], _AXIS_SIGN[i]
     f, lk = _FR + i * FRAME, _LK + i * LINK
     # where the child's force acts: the next origin, or the swing sole for the last link
     nxt = _SW if i == N_LINK - 1 else _FR + (i + 1) * FRAME + 9 * B
@@ -510,8 +512,8 @@ def _backward(i, mass, n, w):
         mz = w[lk + _H + 2 * B + j] + (cx * Fy - cy * Fx) + w[_M + 2 * B + j] + (px * fy - py * fx)
         w[_M + j], w[_M + B + j], w[_M + 2 * B + j] = mx, my, mz
         w[_F + j], w[_F + B + j], w[_F + 2 * B + j] = Fx + fx, Fy + fy, Fz + fz
-        w[_TAURAW + i * B + j] = (
-            mx * w[lk + _U + j] + my * w[lk + _U + B + j] + mz * w[lk + _U + 2 * B + j]
+        w[_TAURAW + i * B + j] = sign * (
+            mx * w[f + 2 * B + j] + my * w[f + 5 * B + j] + mz * w[f + 8 * B + j]
         )
         # eq. (4) from link motion
         qx, qy, qz = ox + cx, oy + cy, oz + cz
@@ -526,17 +528,17 @@ def _backward(i, mass, n, w):
 def _swing_split(i, n, w):
     """Torque of joint i (row i of Table I) less the swing foot's share of the wrench; power."""
     n = min(n, B)  # a bound on the trip count (module doc)
-    f, lk = _FR + i * FRAME, _LK + i * LINK
+    f, sign = _FR + i * FRAME, _AXIS_SIGN[i]
     for j in range(n):
         fs0, fs1, fs2 = w[_FS + j], w[_FS + B + j], w[_FS + 2 * B + j]
         rx = w[_SW + j] - w[f + 9 * B + j]
         ry = w[_SW + B + j] - w[f + 10 * B + j]
         rz = w[_SW + 2 * B + j] - w[f + 11 * B + j]
         c0, c1, c2 = ry * fs2 - rz * fs1, rz * fs0 - rx * fs2, rx * fs1 - ry * fs0
-        t_i = w[_TAURAW + i * B + j] - (
-            w[lk + _U + j] * (c0 + w[_MS + j])
-            + w[lk + _U + B + j] * (c1 + w[_MS + B + j])
-            + w[lk + _U + 2 * B + j] * (c2 + w[_MS + 2 * B + j])
+        t_i = w[_TAURAW + i * B + j] - sign * (
+            w[f + 2 * B + j] * (c0 + w[_MS + j])
+            + w[f + 5 * B + j] * (c1 + w[_MS + B + j])
+            + w[f + 8 * B + j] * (c2 + w[_MS + 2 * B + j])
         )
         w[_TAU + (i - 1) * B + j] = t_i
         w[_POWER + j] += abs(t_i * w[_QD + (i - 1) * B + j])
@@ -711,3 +713,4 @@ def power(w, j):
 def half_angle(w, k, j):
     """tan(q/2) of pitch joint q_{k+2} (k = 0..5) at sample j of the block just evaluated."""
     return w[_HALF + k * B + j]
+
