@@ -145,10 +145,11 @@ def _refine(args, x, y, pa, ta, fa, pb, tb_, fb, pc, tc, fc, scratch):
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
-def _refine_all(args, x, y, pieces, times, margin, low, scratch):
+def _refine_all(args, x, y, pieces, times, inner, margin, low, scratch):
     """Smallest margin [m] found by refining the local minima of the sampled ``margin``.
 
-    ``low`` is the smallest sampled margin [m], where the search starts from.
+    ``low`` is the smallest sampled margin [m], where the search starts from; ``inner``
+    (``_inner``) marks the samples with a neighbour of their phase on either side.
 
     A minimum is bracketed by its two neighbours within its phase; next to each
     phase end the samples hold a probe (``tables.limit_samples``), so a margin that
@@ -163,15 +164,11 @@ def _refine_all(args, x, y, pieces, times, margin, low, scratch):
     vertical force sends the ZMP away, come out less deep.
     Returns (margin [m], samples evaluated).
     """
-    pi = args[1]
     n = times.size
     found_at = np.empty(n, dtype=np.int64)
     count = 0
     for j in range(1, n - 1):
-        ph = pi[pieces[j], tb.PHASE]
-        left = pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
-        right = pi[pieces[j + 1], tb.PHASE] == ph and times[j + 1] > times[j]
-        if left and right and margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
+        if inner[j] and margin[j] < margin[j - 1] and margin[j] <= margin[j + 1]:
             found_at[count] = j
             count += 1
     minima = found_at[:count]
@@ -188,6 +185,19 @@ def _refine_all(args, x, y, pieces, times, margin, low, scratch):
         )  # fmt: skip
         low, evaluated = min(low, found[0]), evaluated + found[1]
     return low, evaluated
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _inner(pi, pieces, times):
+    """Whether sample j has a sample of its phase before and after it in time, (n,)."""
+    n = times.size
+    inner = np.zeros(n, dtype=np.bool_)
+    for j in range(1, n - 1):
+        ph = pi[pieces[j], tb.PHASE]
+        left = pi[pieces[j - 1], tb.PHASE] == ph and times[j - 1] < times[j]
+        right = pi[pieces[j + 1], tb.PHASE] == ph and times[j + 1] > times[j]
+        inner[j] = left and right
+    return inner
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -208,14 +218,17 @@ def scores(
     work_out, margin_out, gap_out = np.empty(P), np.empty(P), np.empty(P)
     count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
+    inner = _inner(pi, pieces, times)
+    at = np.empty(n, dtype=np.int64)  # where sample j sits in the block-ordered rows
+    for b in range(nb):
+        for k in range(count[b]):
+            at[index[b, k]] = b * sm.BLOCK + k
     for p in prange(P):
         scratch = sm.scratch()
-        margin = np.empty(n)
-        power = np.empty(n)
-        high = np.full(6, -np.inf)  # extremes of tan(q/2) of q2..q7
-        low_h = np.full(6, np.inf)
+        by_block = np.empty((2, nb * sm.BLOCK))  # margin, power of each block's lanes
         x = X[p]
         y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
+        sm.start_extremes(scratch)
         bad = False
         done = 0
         for b in range(nb):
@@ -223,26 +236,25 @@ def scores(
                 inputs, b, size[b], double[b], y, geometry, dh_a, d5, mass, com, inertia,
                 gravity, x, scratch,
             )  # fmt: skip
-            m = count[b]
-            for k in range(m):
-                margin[index[b, k]] = sm.margin(scratch, k)
-                power[index[b, k]] = sm.power(scratch, k)
-                bad = bad or np.isnan(sm.margin(scratch, k)) or np.isnan(sm.power(scratch, k))
-            for i in range(6):
-                for k in range(m):
-                    h = sm.half_angle(scratch, i, k)
-                    high[i] = max(high[i], h)
-                    low_h[i] = min(low_h[i], h)
-            done += m
-            if bad:  # out of reach: no need to go on
+            # the padding lanes repeat a block's last sample: read them too (whole vectors)
+            lanes = slice(b * sm.BLOCK, (b + 1) * sm.BLOCK)
+            nans = sm.keep_block(scratch, size[b], by_block[0, lanes], by_block[1, lanes])
+            sm.keep_extremes(scratch, size[b])
+            done += count[b]
+            if nans:  # out of reach: no need to go on
+                bad = True
                 count_out[p] = done
                 break
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
+        margin, power = np.empty(n), np.empty(n)
+        for j in range(n):
+            margin[j], power[j] = by_block[0, at[j]], by_block[1, at[j]]
         gap = -np.inf
         for i in range(6):
-            q_high, q_low = 2.0 * np.arctan(high[i]), 2.0 * np.arctan(low_h[i])
+            high, low_h = sm.extremes(scratch, i)
+            q_high, q_low = 2.0 * np.arctan(high), 2.0 * np.arctan(low_h)
             gap = max(gap, limits[i + 1, 0] - q_low, q_high - limits[i + 1, 1])
         total = 0.0
         low = np.inf
@@ -251,7 +263,7 @@ def scores(
             if j:
                 total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if refine:
-            low, extra = _refine_all(args, x, y, pieces, times, margin, low, scratch)
+            low, extra = _refine_all(args, x, y, pieces, times, inner, margin, low, scratch)
             count_out[p] += extra
         work_out[p], margin_out[p], gap_out[p] = total, low, gap
     return work_out, margin_out, gap_out, count_out

@@ -111,7 +111,10 @@ N_LINK = 9
 _C, _A, _H = 0 * B, 3 * B, 6 * B
 LINK = 9 * B
 _LK = _FR + N_LINK * FRAME
-SCRATCH = _LK + N_LINK * LINK
+# Running extremes of tan(q/2) of q2..q7 per lane of the block, over an individual's
+# blocks (``start_extremes``, ``keep_extremes``): maxima (6 rows), then minima (6).
+_EXT = _LK + N_LINK * LINK
+SCRATCH = _EXT + 12 * B
 
 _KW = {"cache": True, "error_model": "numpy", "nogil": True}
 
@@ -714,3 +717,52 @@ def half_angle(w, k, j):
     """tan(q/2) of pitch joint q_{k+2} (k = 0..5) at sample j of the block just evaluated."""
     return w[_HALF + k * B + j]
 
+
+@njit(**_KW)
+def start_extremes(w):
+    """Reset the running extremes of tan(q/2) (``keep_extremes``) to (−inf, inf)."""
+    for j in range(6 * B):
+        w[_EXT + j] = -np.inf
+        w[_EXT + 6 * B + j] = np.inf
+
+
+@njit(**_KW)
+def keep_extremes(w, n):
+    """Fold the first n samples' tan(q/2) of q2..q7 into the running extremes, per lane.
+
+    Lane by lane (a vector loop; the reduction over lanes is ``extremes``, once per
+    individual): a reduction into one maximum per joint after every block ran scalar,
+    12 ns per sample.
+    """
+    n = min(n, B)  # a bound on the trip count (module doc)
+    for k in range(6):
+        for j in range(n):
+            h = w[_HALF + k * B + j]
+            high, low = w[_EXT + k * B + j], w[_EXT + (6 + k) * B + j]
+            w[_EXT + k * B + j] = h if h > high else high
+            w[_EXT + (6 + k) * B + j] = h if h < low else low
+
+
+@njit(**_KW)
+def extremes(w, k):
+    """(largest, smallest) tan(q/2) of pitch joint q_{k+2} (k = 0..5) kept so far."""
+    high, low = -np.inf, np.inf
+    for j in range(B):
+        high = max(high, w[_EXT + k * B + j])
+        low = min(low, w[_EXT + (6 + k) * B + j])
+    return high, low
+
+
+@njit(**_KW)
+def keep_block(w, n, margins, powers):
+    """Margins [m] and Σ|τθ̇| [W] of the first n samples into margins, powers ((≥ n,) each).
+
+    Returns how many of them are NaN (out of reach).
+    """
+    n = min(n, B)  # a bound on the trip count (module doc)
+    nans = 0
+    for j in range(n):
+        m, p = w[_MARGIN + j], w[_POWER + j]
+        margins[j], powers[j] = m, p
+        nans += (m != m) + (p != p)
+    return nans
