@@ -214,10 +214,15 @@ def _gait_ik(x, y, geometry, n, w):
         wp, wv, wa = _cubic(w, tb.SWAY, j, tau)
         w[_LAM + j] = tilt * (mp + sway * (wp - mp))
         w[_XS + j] = step * w[_IN + tb.STANCE_X * B + j]
-    # sin and cos of λ: a scalar loop of its own (libm calls do not vectorise)
+    # sin and cos of λ: a scalar loop of its own (libm calls do not vectorise), called
+    # once per run of equal λ: a block's samples are in time order, and with the "hold"
+    # lean (the paper's) λ is one constant through each SSP
+    last, sl, cl = np.nan, np.nan, np.nan
     for j in range(n):
-        w[_ST + j] = np.sin(w[_LAM + j])
-        w[_CT + j] = np.cos(w[_LAM + j])
+        lam = w[_LAM + j]
+        if lam != last:
+            last, sl, cl = lam, np.sin(lam), np.cos(lam)
+        w[_ST + j], w[_CT + j] = sl, cl
     for j in range(n):
         tau = w[t_row + j] - w[t0_row + j]
         towards = w[_IN + tb.TOWARDS * B + j]
