@@ -371,9 +371,9 @@ def _frame(i, a, d5, n, w):
 
 @njit(inline="always", **_KW)
 def _link(i, com, inertia, n, w):
-    """Link i of the outward recursion: ω, ω̇ and a − g carried from joint origin i − 1
-    to origin i (rotation about u_i; nothing to carry for i = 0), then the link's CoM
-    offset, CoM acceleration − g, Ḣ and joint axis.
+    """Link i ≥ 1 of the outward recursion: ω, ω̇ and a − g carried from joint origin
+    i − 1 to origin i (rotation about u_i), then the link's CoM offset, CoM
+    acceleration − g and Ḣ (link 0: ``_outward``).
 
     The CoM in the DH frame is that of the sample's stance side.
     """
@@ -393,26 +393,25 @@ def _link(i, com, inertia, n, w):
         wx, wy, wz = w[_OMEGA + j], w[_OMEGA + B + j], w[_OMEGA + 2 * B + j]
         dx, dy, dz = w[_DOMEGA + j], w[_DOMEGA + B + j], w[_DOMEGA + 2 * B + j]
         ax, ay, az = w[_ACC + j], w[_ACC + B + j], w[_ACC + 2 * B + j]
-        if i > 0:
-            ux, uy, uz = sign * r02, sign * r12, sign * r22
-            rx = w[f + 9 * B + j] - w[e + 9 * B + j]
-            ry = w[f + 10 * B + j] - w[e + 10 * B + j]
-            rz = w[f + 11 * B + j] - w[e + 11 * B + j]
-            t0, t1, t2 = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
-            ax += dy * rz - dz * ry + wy * t2 - wz * t1
-            ay += dz * rx - dx * rz + wz * t0 - wx * t2
-            az += dx * ry - dy * rx + wx * t1 - wy * t0
-            q1, q2 = w[qd + j], w[qdd + j]
-            sx, sy, sz = q1 * ux, q1 * uy, q1 * uz
-            dx, dy, dz = (
-                dx + wy * sz - wz * sy + q2 * ux,
-                dy + wz * sx - wx * sz + q2 * uy,
-                dz + wx * sy - wy * sx + q2 * uz,
-            )
-            wx, wy, wz = wx + sx, wy + sy, wz + sz
-            w[_ACC + j], w[_ACC + B + j], w[_ACC + 2 * B + j] = ax, ay, az
-            w[_DOMEGA + j], w[_DOMEGA + B + j], w[_DOMEGA + 2 * B + j] = dx, dy, dz
-            w[_OMEGA + j], w[_OMEGA + B + j], w[_OMEGA + 2 * B + j] = wx, wy, wz
+        ux, uy, uz = sign * r02, sign * r12, sign * r22
+        rx = w[f + 9 * B + j] - w[e + 9 * B + j]
+        ry = w[f + 10 * B + j] - w[e + 10 * B + j]
+        rz = w[f + 11 * B + j] - w[e + 11 * B + j]
+        t0, t1, t2 = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+        ax += dy * rz - dz * ry + wy * t2 - wz * t1
+        ay += dz * rx - dx * rz + wz * t0 - wx * t2
+        az += dx * ry - dy * rx + wx * t1 - wy * t0
+        q1, q2 = w[qd + j], w[qdd + j]
+        sx, sy, sz = q1 * ux, q1 * uy, q1 * uz
+        dx, dy, dz = (
+            dx + wy * sz - wz * sy + q2 * ux,
+            dy + wz * sx - wx * sz + q2 * uy,
+            dz + wx * sy - wy * sx + q2 * uz,
+        )
+        wx, wy, wz = wx + sx, wy + sy, wz + sz
+        w[_ACC + j], w[_ACC + B + j], w[_ACC + 2 * B + j] = ax, ay, az
+        w[_DOMEGA + j], w[_DOMEGA + B + j], w[_DOMEGA + 2 * B + j] = dx, dy, dz
+        w[_OMEGA + j], w[_OMEGA + B + j], w[_OMEGA + 2 * B + j] = wx, wy, wz
         cx = r00 * cb0 + r01 * cb1 + r02 * cb2
         cy = r10 * cb0 + r11 * cb1 + r12 * cb2
         cz = r20 * cb0 + r21 * cb1 + r22 * cb2
@@ -452,7 +451,24 @@ def _outward(com, inertia, gravity, n, w):
     # is wrapped, which stops vectorising), nor for ``_frame`` and ``_backward`` (FK 32
     # vs 8 ns per sample, ``_inward`` 46 vs 13, for reasons not found): they keep one
     # inlined call per row or link, each index a literal.
-    _link(0, com, inertia, n, w)
+    # Link 0 (the stance foot) does not move: its CoM offset is that of frame 0, its
+    # acceleration − g is −g and its Ḣ zero (``_link`` with ω = ω̇ = 0, without the
+    # products of zeros).
+    l0, l1, l2 = com[0, 0, 0], com[0, 0, 1], com[0, 0, 2]
+    r0, r1, r2 = com[1, 0, 0], com[1, 0, 1], com[1, 0, 2]
+    for j in range(n):
+        right = w[_SIDE + j] > 0.5
+        cb0, cb1, cb2 = (r0, r1, r2) if right else (l0, l1, l2)
+        w[_LK + _C + j] = w[_FR + j] * cb0 + w[_FR + B + j] * cb1 + w[_FR + 2 * B + j] * cb2
+        w[_LK + _C + B + j] = (
+            w[_FR + 3 * B + j] * cb0 + w[_FR + 4 * B + j] * cb1 + w[_FR + 5 * B + j] * cb2
+        )
+        w[_LK + _C + 2 * B + j] = (
+            w[_FR + 6 * B + j] * cb0 + w[_FR + 7 * B + j] * cb1 + w[_FR + 8 * B + j] * cb2
+        )
+        w[_LK + _A + j], w[_LK + _A + B + j] = -gravity[0], -gravity[1]
+        w[_LK + _A + 2 * B + j] = -gravity[2]
+        w[_LK + _H + j] = w[_LK + _H + B + j] = w[_LK + _H + 2 * B + j] = 0.0
     for i in range(1, N_LINK):
         _link(i, com, inertia, n, w)
 
