@@ -474,8 +474,12 @@ def _outward(com, inertia, gravity, n, w):
 
 
 @njit(**_KW)
-def _inward(mass, n, w):
-    """Inward recursion, the DSP split of the ground wrench, torques, power, ZMP."""
+def _inward(mass, double, n, w):
+    """Inward recursion, the DSP split of the ground wrench, torques, power, ZMP.
+
+    In SSP (``double`` 0) the swing foot's share is zero and the torques are the
+    recursion's (``_swing_split`` would subtract products of zeros).
+    """
     n = min(n, B)  # a bound on the trip count (module doc)
     for j in range(n):
         w[_F + j] = w[_F + B + j] = w[_F + 2 * B + j] = 0.0
@@ -512,8 +516,12 @@ def _inward(mass, n, w):
         w[_ZX + j] = (w[_NUMX + j] - w[_HY + j]) / w[_DEN + j]
         w[_ZY + j] = (w[_NUMY + j] + w[_HX + j]) / w[_DEN + j]
         w[_POWER + j] = 0.0
-    for i in range(1, N_LINK):
-        _swing_split(i, n, w)
+    if double:
+        for i in range(1, N_LINK):
+            _swing_split(i, n, w)
+    else:
+        for i in range(1, N_LINK):
+            _unsplit(i, n, w)
 
 
 @njit(inline="always", **_KW)
@@ -564,6 +572,16 @@ def _swing_split(i, n, w):
             + w[f + 5 * B + j] * (c1 + w[_MS + B + j])
             + w[f + 8 * B + j] * (c2 + w[_MS + 2 * B + j])
         )
+        w[_TAU + (i - 1) * B + j] = t_i
+        w[_POWER + j] += abs(t_i * w[_QD + (i - 1) * B + j])
+
+
+@njit(inline="always", **_KW)
+def _unsplit(i, n, w):
+    """Torque of joint i (row i of Table I) in SSP, where the swing foot carries nothing; power."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    for j in range(n):
+        t_i = w[_TAURAW + i * B + j]
         w[_TAU + (i - 1) * B + j] = t_i
         w[_POWER + j] += abs(t_i * w[_QD + (i - 1) * B + j])
 
@@ -667,7 +685,7 @@ def evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravit
     _gait_ik(x, y, geometry, n, w)
     _kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
     _outward(com, inertia, gravity, n, w)
-    _inward(mass, n, w)
+    _inward(mass, double, n, w)
     _margin(geometry, double, n, w)
 
 
