@@ -21,9 +21,13 @@ scalar). The maths is that of the readable modules:
 * FK (``kinematics.Chain.poses``): Table I's rows with their known twists;
 * Newton-Euler (``newton_euler.inverse_dynamics_poses``) with every vector in S,
   then the DSP split of the ground wrench (``newton_euler.swing_wrench_torques``);
-* multibody ZMP of eq. (4) (``zmp.zmp_multibody``), the support polygon and its
-  signed margin (``zmp.support_polygon``, ``zmp.signed_margin``), the friction
-  ratio, the LIPM ZMP and the CoP of the Newton-Euler wrench.
+* the multibody ZMP of eq. (4) (``zmp.zmp_multibody``) as the CoP of the recursion's
+  ground wrench, the point of the plane where its tangential moment vanishes: the
+  same sums (Σ m_i (a_i − g) = F, Σ q_i × m_i (a_i − g) + Ḣ_i = the moment about the
+  origin of S), which the recursion has already added up (summing them apart cost
+  2-3 ns per sample); the numpy reference sums eq. (4) link by link and a test holds
+  the two equal. Then the support polygon and its signed margin
+  (``zmp.support_polygon``, ``zmp.signed_margin``), the friction ratio and the LIPM ZMP.
 
 All vectors are in the slope frame S [m, m/s, m/s², N, N m]; angles [rad].
 
@@ -89,15 +93,14 @@ _F, _M = 64 * B, 67 * B  # inward force and moment (3 each)
 _SM = 70 * B  # ground moment about the stance sole point (3)
 _FS, _MS = 73 * B, 76 * B  # the swing foot's share of the ground wrench (3 + 3)
 _ZX, _ZY = 79 * B, 80 * B  # ZMP
-_NUMX, _NUMY, _DEN, _HX, _HY = 81 * B, 82 * B, 83 * B, 84 * B, 85 * B  # eq. (4) sums
-_POWER = 86 * B
-_MARGIN = 87 * B
-_VERT = 88 * B  # polygon vertices x0, y0, x1, … (16)
-_TAURAW = 104 * B  # m · u of each joint before the swing split (9: row 0 unused)
-_TAU = 113 * B  # joint torques (8)
-_SEG = 121 * B  # smallest squared distance of the ZMP to a polygon edge
-_XS, _YS = 122 * B, 123 * B  # the stance sole's x and y
-_IN = 124 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
+_POWER = 81 * B
+_MARGIN = 82 * B
+_VERT = 83 * B  # polygon vertices x0, y0, x1, … (16)
+_TAURAW = 99 * B  # m · u of each joint before the swing split (9: row 0 unused)
+_TAU = 108 * B  # joint torques (8)
+_SEG = 116 * B  # smallest squared distance of the ZMP to a polygon edge
+_XS, _YS = 117 * B, 118 * B  # the stance sole's x and y
+_IN = 119 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
 _SIDE = _IN + tb.IN_SIDE * B  # stance side, 0.0 left / 1.0 right
 _SCALARS = _IN + tb.INPUTS * B
 # Frames 0..8 from _FR, FRAME rows each: 3 r + c is R[r, c] (column c the frame's axis
@@ -484,7 +487,6 @@ def _inward(mass, double, n, w):
     for j in range(n):
         w[_F + j] = w[_F + B + j] = w[_F + 2 * B + j] = 0.0
         w[_M + j] = w[_M + B + j] = w[_M + 2 * B + j] = 0.0
-        w[_NUMX + j] = w[_NUMY + j] = w[_DEN + j] = w[_HX + j] = w[_HY + j] = 0.0
     # one call per link, its index a literal (see ``_outward``); the swing split
     # vectorises as a loop
     _backward(8, mass, n, w)
@@ -513,8 +515,9 @@ def _inward(mass, double, n, w):
         w[_MS + j] = other * (sm0 + e0)
         w[_MS + B + j] = other * (sm1 + e1)
         w[_MS + 2 * B + j] = other * (sm2 + e2)
-        w[_ZX + j] = (w[_NUMX + j] - w[_HY + j]) / w[_DEN + j]
-        w[_ZY + j] = (w[_NUMY + j] + w[_HX + j]) / w[_DEN + j]
+        # ZMP: the moment about the origin of S is sm + (xs, ys, 0) × F (eq. (4), module doc)
+        w[_ZX + j] = -(sm1 - xs * fz) / fz
+        w[_ZY + j] = (sm0 + ys * fz) / fz
         w[_POWER + j] = 0.0
     if double:
         for i in range(1, N_LINK):
@@ -526,7 +529,7 @@ def _inward(mass, double, n, w):
 
 @njit(inline="always", **_KW)
 def _backward(i, mass, n, w):
-    """Link i of the inward recursion: force and moment at origin i, m · u_i, eq. (4) sums."""
+    """Link i of the inward recursion: force and moment at origin i, m · u_i."""
     n = min(n, B)  # a bound on the trip count (module doc)
     m_i, sign = mass[i], _AXIS_SIGN[i]
     f, lk = _FR + i * FRAME, _LK + i * LINK
@@ -547,13 +550,6 @@ def _backward(i, mass, n, w):
         w[_TAURAW + i * B + j] = sign * (
             mx * w[f + 2 * B + j] + my * w[f + 5 * B + j] + mz * w[f + 8 * B + j]
         )
-        # eq. (4) from link motion
-        qx, qy, qz = ox + cx, oy + cy, oz + cz
-        w[_DEN + j] += m_i * az
-        w[_NUMX + j] += m_i * (qx * az - ax * qz)
-        w[_NUMY + j] += m_i * (qy * az - ay * qz)
-        w[_HX + j] += w[lk + _H + j]
-        w[_HY + j] += w[lk + _H + B + j]
 
 
 @njit(inline="always", **_KW)

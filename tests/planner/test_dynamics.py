@@ -7,7 +7,8 @@ from conftest import away_from_phase_changes
 from planner.kinematics import Chain, gravity_in_slope
 from planner.newton_euler import inverse_dynamics
 from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from planner.reference import solve_reference
+from planner.trajectory import GaitParams, Timeline
 from planner.zmp import cop_of_wrench, zmp_multibody
 
 
@@ -93,9 +94,19 @@ def test_static_zmp_is_com_projected_along_gravity(spec, slope_deg):
 
 @pytest.mark.parametrize("step_time, slope_deg", [(2.0, 0.0), (0.5, 10.0), (0.4, 22.5)])
 def test_multibody_zmp_equals_newton_euler_cop(spec, step_time, slope_deg):
-    """Eq. (4) from link motion equals the CoP of the feet's ground wrenches from NE."""
-    plan = plan_walk(spec, GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope_deg)))
-    np.testing.assert_allclose(plan.zmp, plan.cop_ne, atol=1e-9)
+    """Eq. (4) from link motion equals the CoP of the feet's ground wrenches from NE.
+
+    Eq. (4) as the numpy reference sums it over the links; the CoP from the wrench of
+    the compiled kernel's recursion (which takes its ZMP from that wrench) and of the
+    reference's.
+    """
+    params = GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope_deg))
+    plan = plan_walk(spec, params)
+    x = np.array([[params.hip_height], [params.swing_lift], [params.tilt]])
+    reference = solve_reference(spec, Timeline.of(params), params.slope, *x, strict=True)
+    eq4 = reference["zmp"][0]
+    np.testing.assert_allclose(eq4, plan.cop_ne, atol=1e-9)
+    np.testing.assert_allclose(eq4, reference["cop_ne"][0], atol=1e-9)
 
 
 def test_lipm_matches_slow_and_departs_fast(spec):
