@@ -419,23 +419,22 @@ def _link(i, com, inertia, n, w):
         cy = r10 * cb0 + r11 * cb1 + r12 * cb2
         cz = r20 * cb0 + r21 * cb1 + r22 * cb2
         t0, t1, t2 = wy * cz - wz * cy, wz * cx - wx * cz, wx * cy - wy * cx
-        # Ḣ = R I Rᵀ ω̇ + ω × R I Rᵀ ω
-        lw0 = i0 * (r00 * wx + r10 * wy + r20 * wz)
-        lw1 = i1 * (r01 * wx + r11 * wy + r21 * wz)
-        lw2 = i2 * (r02 * wx + r12 * wy + r22 * wz)
-        ld0 = i0 * (r00 * dx + r10 * dy + r20 * dz)
-        ld1 = i1 * (r01 * dx + r11 * dy + r21 * dz)
-        ld2 = i2 * (r02 * dx + r12 * dy + r22 * dz)
-        iw0 = r00 * lw0 + r01 * lw1 + r02 * lw2
-        iw1 = r10 * lw0 + r11 * lw1 + r12 * lw2
-        iw2 = r20 * lw0 + r21 * lw1 + r22 * lw2
+        # Ḣ = R I Rᵀ ω̇ + ω × R I Rᵀ ω = R (I ω̇' + ω' × I ω') with ω' = Rᵀ ω, ω̇' = Rᵀ ω̇
+        # in the link's principal axes (one product with R fewer)
+        b0 = r00 * wx + r10 * wy + r20 * wz
+        b1 = r01 * wx + r11 * wy + r21 * wz
+        b2 = r02 * wx + r12 * wy + r22 * wz
+        k0, k1, k2 = i0 * b0, i1 * b1, i2 * b2
+        h0 = i0 * (r00 * dx + r10 * dy + r20 * dz) + (b1 * k2 - b2 * k1)
+        h1 = i1 * (r01 * dx + r11 * dy + r21 * dz) + (b2 * k0 - b0 * k2)
+        h2 = i2 * (r02 * dx + r12 * dy + r22 * dz) + (b0 * k1 - b1 * k0)
         w[lk + _C + j], w[lk + _C + B + j], w[lk + _C + 2 * B + j] = cx, cy, cz
         w[lk + _A + j] = ax + dy * cz - dz * cy + wy * t2 - wz * t1
         w[lk + _A + B + j] = ay + dz * cx - dx * cz + wz * t0 - wx * t2
         w[lk + _A + 2 * B + j] = az + dx * cy - dy * cx + wx * t1 - wy * t0
-        w[lk + _H + j] = r00 * ld0 + r01 * ld1 + r02 * ld2 + wy * iw2 - wz * iw1
-        w[lk + _H + B + j] = r10 * ld0 + r11 * ld1 + r12 * ld2 + wz * iw0 - wx * iw2
-        w[lk + _H + 2 * B + j] = r20 * ld0 + r21 * ld1 + r22 * ld2 + wx * iw1 - wy * iw0
+        w[lk + _H + j] = r00 * h0 + r01 * h1 + r02 * h2
+        w[lk + _H + B + j] = r10 * h0 + r11 * h1 + r12 * h2
+        w[lk + _H + 2 * B + j] = r20 * h0 + r21 * h1 + r22 * h2
 
 
 @njit(**_KW)
