@@ -219,6 +219,9 @@ def scores(
     count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
     inner = _inner(pi, pieces, times)
+    half_step = np.zeros(n)  # half the time step before each sample [s] (0 at the first)
+    for j in range(1, n):
+        half_step[j] = 0.5 * (times[j] - times[j - 1])
     at = np.empty(n, dtype=np.int64)  # where sample j sits in the block-ordered rows
     for b in range(nb):
         for k in range(count[b]):
@@ -248,20 +251,19 @@ def scores(
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
             continue
-        margin, power = np.empty(n), np.empty(n)
-        for j in range(n):
-            margin[j], power[j] = by_block[0, at[j]], by_block[1, at[j]]
+        margin = np.empty(n)
+        low, total, previous = np.inf, 0.0, 0.0
+        for j in range(n):  # time order: trapezoid of the power, smallest sampled margin
+            m, pw = by_block[0, at[j]], by_block[1, at[j]]
+            margin[j] = m
+            low = min(low, m)
+            total += half_step[j] * (pw + previous)
+            previous = pw
         gap = -np.inf
         for i in range(6):
             high, low_h = sm.extremes(scratch, i)
             q_high, q_low = 2.0 * np.arctan(high), 2.0 * np.arctan(low_h)
             gap = max(gap, limits[i + 1, 0] - q_low, q_high - limits[i + 1, 1])
-        total = 0.0
-        low = np.inf
-        for j in range(n):
-            low = min(low, margin[j])
-            if j:
-                total += 0.5 * (times[j] - times[j - 1]) * (power[j] + power[j - 1])
         if refine:
             low, extra = _refine_all(args, x, y, pieces, times, inner, margin, low, scratch)
             count_out[p] += extra
