@@ -42,14 +42,17 @@ next is then at least the trip count: without the bound the compiler must assume
 rows may overlap and leaves the loops scalar.
 
 Measured per sample on one core (block of 64, numba 0.68, Zen 5 AVX-512, load ~2):
-copying the block's inputs 1 ns, gait and IK 20 ns (of which ~7 ns libm's sin/cos of
-λ, a scalar loop: numba vectorises them only through SVML, which llvmlite 0.50's
-wheels are built without; a branch-free sin/cos of our own measured 13 ns but would
-be a home-made copy of libm, so it is not used), FK 8.5, outward recursion 21, inward
-14, margin 1 (SSP) or 6 (DSP); a whole block ~73-78 ns. A block's cost is far from
-proportional to its samples: the samples past the last multiple of 8 run scalar
-(~400-900 ns each), and each stage has a fixed cost, so a block of 64 cost 73 ns per
-sample, one of 33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43
+copying the block's inputs 1 ns, gait and IK 11 ns in SSP and 20 in DSP (of which ~9
+ns libm's sin/cos of λ, a scalar loop: numba vectorises them only through SVML, which
+llvmlite 0.50's wheels are built without, and its ``-vector-library`` option had no
+effect with glibc's libmvec either; a branch-free sin/cos of our own measured 13 ns
+but would be a home-made copy of libm, so it is not used; in SSP the "hold" lean's λ
+is constant and sin/cos run once per step), FK 8.5-10, outward recursion 20-22,
+inward 12.5-15 (SSP: no swing split) or 13.5-19 (DSP), margin 1 (SSP) or 6 (DSP); a
+whole block ~63-70 ns in SSP, ~79-87 in DSP (was 73-78 for either). A block's cost
+is far from proportional to its samples: the samples past the last multiple of 8 run
+scalar (~400-900 ns each), and each stage has a fixed cost, so a block of 64 cost 73
+ns per sample, one of 33 (the GA's SSP pieces at 100 samples per step) 108 and one of 43
 (its DSPs) 113, before blocks took several pieces: hence full blocks, padded to a
 multiple of 8. A larger block does not help (128: 79 ns, the scratch outgrows the
 caches), a smaller one neither (32: 92 ns).
