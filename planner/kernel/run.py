@@ -20,7 +20,7 @@ What ``scores`` adds to its blocks is kept to vector loops and one pass per
 individual: the joint-limit extremes lane by lane (``sample.keep_extremes``), a
 block's margins and powers copied whole, then one pass in time order for the minimum
 and the trapezoid, the samples' phase neighbours found once per call. Measured (one
-thread, load ~2): the blocks alone ~68 ns per sample, ``scores`` ~72 (it was ~25%
+thread, load ~1.8): the blocks alone ~70 ns per sample, ``scores`` ~75 (it was ~25%
 above its blocks: the extremes were a scalar reduction after every block, 12 ns).
 
 The Python side (``KernelWalk``) builds the tables once per robot and timeline.
