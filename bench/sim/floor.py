@@ -69,15 +69,28 @@ from planner.joints import LEFT
 G = 9.81  # [m/s²]
 
 
-def impedance(r: float, solimp) -> float:
-    """MuJoCo's impedance d at penetration ``r`` [m] for ``solimp`` (d0, d_width, width, mid, p)."""
+def impedance(r, solimp) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's impedance d at penetration ``r`` [m] (scalar or array) for ``solimp``
+    (d0, d_width, width, mid, p), and its slope dd/dr [1/m] (0 outside the width)."""
     d0, dmax, width, mid, power = (float(v) for v in solimp[:5])
-    x = min(max(r / width, 0.0), 1.0) if width > 0 else 1.0
-    if x <= mid:
-        y = x**power / mid ** (power - 1) if mid > 0 else 1.0
-    else:
-        y = 1 - (1 - x) ** power / (1 - mid) ** (power - 1)
-    return d0 + y * (dmax - d0)
+    r = np.asarray(r, dtype=float)
+    if width <= 0:
+        return np.full(r.shape, dmax), np.zeros(r.shape)
+    x = np.clip(r / width, 0.0, 1.0)
+    low = x <= mid
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.where(
+            low,
+            x**power / mid ** (power - 1) if mid > 0 else 1.0,
+            1 - (1 - x) ** power / (1 - mid) ** (power - 1),
+        )
+        dy = np.where(
+            low,
+            power * x ** (power - 1) / mid ** (power - 1) if mid > 0 else 0.0,
+            power * (1 - x) ** (power - 1) / (1 - mid) ** (power - 1),
+        )
+    slope = np.where((r > 0) & (r < width), (dmax - d0) * dy / width, 0.0)
+    return d0 + y * (dmax - d0), slope
 
 
 @dataclass(frozen=True)
@@ -106,25 +119,19 @@ class SoftFloor:
         inverse_mass = float(model.body_invweight0[model.geom_bodyid[geom.id], 0])
         return cls(timeconst, dampratio, solimp, inverse_mass)
 
+    @property
+    def scale(self) -> float:
+        """1 / (Â d_max² τ² ζ²) [N/m]: f(r) = scale · d² r / (1 − d) (module doc)."""
+        dmax = self.solimp[1]
+        return 1.0 / (self.inverse_mass * dmax**2 * self.timeconst**2 * self.dampratio**2)
+
     def corner_force(self, r) -> tuple[np.ndarray, np.ndarray]:
         """Static force f(r) [N] of one corner at penetration ``r`` [m] and df/dr [N/m]."""
-        d0, dmax, width, mid, power = self.solimp
         r = np.asarray(r, dtype=float)
-        x = np.clip(r / width, 0.0, 1.0)
-        low = x <= mid
-        y = np.where(
-            low, x**power / mid ** (power - 1), 1 - (1 - x) ** power / (1 - mid) ** (power - 1)
-        )
-        dy = np.where(
-            low, power * x ** (power - 1) / mid ** (power - 1),
-            power * (1 - x) ** (power - 1) / (1 - mid) ** (power - 1),
-        )  # fmt: skip
-        dd = np.where((r > 0) & (r < width), (dmax - d0) * dy / width, 0.0)
-        d = d0 + y * (dmax - d0)
-        scale = 1.0 / (self.inverse_mass * dmax**2 * self.timeconst**2 * self.dampratio**2)
+        d, dd = impedance(r, self.solimp)
         pressed = r > 0
-        force = np.where(pressed, scale * d**2 * r / (1 - d), 0.0)
-        slope = scale * ((2 * d * dd * r + d**2) * (1 - d) + d**2 * r * dd) / (1 - d) ** 2
+        force = np.where(pressed, self.scale * d**2 * r / (1 - d), 0.0)
+        slope = self.scale * ((2 * d * dd * r + d**2) * (1 - d) + d**2 * r * dd) / (1 - d) ** 2
         return force, np.where(pressed, slope, 0.0)
 
 
@@ -135,12 +142,10 @@ def corner_stiffness(model: mujoco.MjModel, weight: float) -> float:
     the stiffness), with ``SoftFloor.of_scene``'s constants.
     """
     floor = SoftFloor.of_scene(model)
-    d0, dmax = floor.solimp[:2]
-    scale = 1.0 / (floor.inverse_mass * dmax**2 * floor.timeconst**2 * floor.dampratio**2)
     r, stiffness = 0.0, 0.0
     for _ in range(20):
-        d = impedance(r, floor.solimp)
-        stiffness = scale * d**2 / (1 - d)
+        d = float(impedance(r, floor.solimp)[0])
+        stiffness = floor.scale * d**2 / (1 - d)
         r_next = weight / 4 / stiffness
         if abs(r_next - r) < 1e-9:
             break

@@ -17,10 +17,10 @@ from bench.sim.model import scene_xml
 
 def test_impedance_follows_mujocos_sigmoid():
     solimp = (0.9, 0.95, 0.001, 0.5, 2.0)
-    assert impedance(0.0, solimp) == pytest.approx(0.9)
-    assert impedance(0.0005, solimp) == pytest.approx(0.925)  # the midpoint: halfway
-    assert impedance(0.00025, solimp) == pytest.approx(0.9 + 0.05 * 2 * 0.25**2)
-    assert impedance(0.002, solimp) == pytest.approx(0.95)  # past the width: d_max
+    assert impedance(0.0, solimp)[0] == pytest.approx(0.9)
+    assert impedance(0.0005, solimp)[0] == pytest.approx(0.925)  # the midpoint: halfway
+    assert impedance(0.00025, solimp)[0] == pytest.approx(0.9 + 0.05 * 2 * 0.25**2)
+    assert impedance(0.002, solimp)[0] == pytest.approx(0.95)  # past the width: d_max
 
 
 def test_a_heavier_load_presses_deeper_and_stiffens_the_corner(spec):
