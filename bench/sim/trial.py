@@ -284,9 +284,9 @@ def compare(
     predicted = (
         predict_trial(plan, friction=trial.friction, actuators=trial.actuators) if predict else None
     )
-    rows = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(lost, default=np.inf))
+    rows = walk & (t < min(lost, default=np.inf))
     down = [e.time for e in events if e.kind in ("fall", "diverged")]  # a tip's turn counts
-    rocking = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < min(down, default=np.inf))
+    rocking = walk & (t < min(down, default=np.inf))
     support = support_difference(plan, recording, rows)
     q_plan = stance_swing_to_left_right(on_walk(plan.q), plan.stance[idx])
     q_aim = q_plan if recording.aim_offset is None else q_plan + recording.aim_offset[walk]
