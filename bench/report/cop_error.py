@@ -20,6 +20,12 @@ where the robot stands) apart:
 * the servo's sag in ``stiff``: the stance leg's joints late in single support lag their
   command by (τ + kv q̇) / kp, which a positions-only mode keeps (``stiff_ff`` feeds it
   forward);
+* what the plan's angles need to track in ``stiff``, added to the command one term at a
+  time (``LADDER``): the floor's give and sink, kv q̇ / kp (the velocity gain acting on
+  the planned speed, as a D term on the error would), A q̈ / kp (the rotor inertia the
+  stiff mode keeps from the servo), and τ / kp (the Newton–Euler torque's static lag):
+  with all four the command is ``stiff_ff``'s, bit for bit (the loop's 50 N m are never
+  reached, so nothing is clipped);
 * the plan's own ZMP jumps at the phase changes (its lean's cubic changes λ̈ there);
 * the soft contact: the same walks with MuJoCo's contact time constant (``solref``,
   0.02 s by default) and time step made smaller (a stiffer floor, finer steps);
@@ -38,7 +44,7 @@ from mujoco import rollout
 
 from bench.report.landing import landing_section
 from bench.sim.floor import SoftFloor
-from bench.sim.model import servo_settings
+from bench.sim.model import Servo, servo_settings
 from bench.sim.playback import (
     HOLD_TIME,
     SETTLE_TIME,
@@ -52,7 +58,7 @@ from bench.sim.playback import (
 )
 from bench.sim.support import touch_downs
 from bench.sim.trial import TrialResult, TrialSpec, compare
-from planner.joints import LEFT
+from planner.joints import LEFT, stance_swing_to_left_right
 from planner.kinematics import rotation_slope_to_world
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec
@@ -68,6 +74,15 @@ CASES = (
     ("stiff_ff", None, "stiff_ff"),
     ("stiff_ff", "give", "stiff_ff, the give fed forward, not the sink"),
     ("stiff_ff", "rigid", "stiff_ff, ankles aimed as on a rigid floor"),
+)
+# What ``stiff`` adds to the plan's angles, one term at a time: (terms of ``lead``, the
+# floor fed forward, label). The last rung is stiff_ff's command.
+LADDER = (
+    ((), "rigid", "the plan's angles (stiff)"),
+    ((), "sink", "+ the floor's give and sink"),
+    (("rate",), "sink", "+ kv q̇ / kp (the velocity gain on the error)"),
+    (("rate", "rotor"), "sink", "+ A q̈ / kp (the rotor's inertia)"),
+    (("torque", "rotor", "rate"), "sink", "+ τ / kp (the static lag): stiff_ff"),
 )
 # (solref time constant [s], time step [s]); MuJoCo keeps the time constant ≥ 2 steps
 CONTACTS = ((0.02, 0.001), (0.02, 0.00025), (0.01, 0.0005), (0.005, 0.00025), (0.002, 0.00025))
@@ -89,11 +104,28 @@ class Case:
     recording: Recording
 
 
+def lead_torque(plan: Plan, servo: Servo, terms: tuple[str, ...]) -> np.ndarray:
+    """The torque whose static lag / kp ``terms`` add to the command, MJCF order [N m],
+    (n, 8) on ``plan.t``: "torque" τ (Newton–Euler), "rotor" A q̈, "rate" (d + kv) q̇,
+    summed in the order given (``playback.feedforward_stance_swing`` sums torque, rotor,
+    rate: in that order the sum is its, unclipped)."""
+    term = {
+        "torque": lambda: plan.tau,
+        "rotor": lambda: servo.armature * plan.qdd,
+        "rate": lambda: (servo.damping + servo.kv) * plan.qd,
+    }
+    total = np.zeros_like(plan.q)
+    for k, name in enumerate(terms):
+        total = term[name]() if k == 0 else total + term[name]()
+    return stance_swing_to_left_right(total, plan.stance)
+
+
 def simulate(
     plan: Plan,
     actuators: str,
     *,
     floor_ff: str | None = None,
+    leads: tuple[str, ...] = (),
     timeconst: float | None = None,
     timestep: float = 0.001,
 ) -> Recording:
@@ -106,6 +138,9 @@ def simulate(
             sole's give, "sink" that and the legs shortened by the soles' sink
             (``playback.floor_feedforward``); None: as the mode does ("sink" in a "_ff"
             mode, "rigid" otherwise).
+        leads: ``lead_torque``'s terms, / kp, added to the command of a mode without
+            feedforward before the floor's offsets (the order in which
+            ``commands_and_aim`` adds a "_ff" mode's).
     """
     model = build_model(plan, friction=FRICTION, actuators=actuators, timestep=timestep)
     if timeconst is not None:
@@ -116,6 +151,10 @@ def simulate(
     t, q_ref, aim = commands_and_aim(
         plan, timestep, SETTLE_TIME, HOLD_TIME, servo, floor if floor_ff in (None, own) else None
     )
+    if leads:
+        if servo.feedforward:
+            raise ValueError(f"leads {leads!r}: only for a mode without feedforward")
+        q_ref = q_ref + on_rows(t, plan, lead_torque(plan, servo, leads)) / servo.kp
     if floor_ff not in (None, own, "rigid"):
         aim = on_rows(t, plan, floor_feedforward(plan, floor, touchdown=floor_ff == "sink"))
         q_ref = q_ref + aim
@@ -135,6 +174,7 @@ def simulate(
 
 
 def run_case(plan: Plan, actuators: str, label: str, **options) -> Case:
+    """``simulate``'s walk compared with the plan as ``slopewalk trial`` does."""
     recording = simulate(plan, actuators, **options)
     trial = TrialSpec(plan.params, friction=FRICTION, actuators=actuators)
     return Case(label, compare(plan, trial, recording, wall_s=0.0), recording)
@@ -200,6 +240,41 @@ def double_support_slide(plan: Plan, case: Case) -> tuple[float, float, float]:
     return float(planned), float(simulated), float(np.mean(limited))
 
 
+def ladder_section(plan: Plan) -> list[str]:
+    """Markdown lines: ``stiff`` with ``LADDER``'s terms added to its command one at a time."""
+    lines = [
+        "",
+        "## stiff: what its command lacks, one term at a time",
+        "",
+        "A position loop reaches its command only where it needs no torque: it lags by "
+        "(τ + A q̈ + (d + kv) q̇) / kp. Each row adds one more of those terms, as a position "
+        "(`cop_error.lead_torque`), to the plan's angles; the floor's give and sink are "
+        "geometry (positions from the planned loads). The last row is stiff_ff's command.",
+        "",
+        "| command | RMS [mm] | max [mm] | first contact vs planned touch-down [ms] | "
+        "normal velocity there [mm/s] | unplanned support [s] | joint tracking of the plan [°] |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for terms, floor_ff, label in LADDER:
+        c = run_case(plan, "stiff", label, floor_ff=floor_ff, leads=terms)
+        early, speed = touch_downs(plan, c.recording)
+        r, s = c.result, c.result.series
+        tracking = (s["q_simulated"] - s["q_planned"])[s["standing"]]
+        lines.append(
+            f"| {label} | {r.zmp_rms * 1e3:.2f} | {r.zmp_max * 1e3:.1f} | "
+            f"{np.nanmean(early) * 1e3:+.0f} | {np.nanmean(speed) * 1e3:+.1f} | "
+            f"{r.unplanned_support_s:.3f} | {np.rad2deg(np.sqrt(np.mean(tracking**2))):.3f} |"
+        )
+    lines += [
+        "",
+        "Positions alone (every row but the last) leave the static lag τ / kp: the robot "
+        "stands lower and turned by it, and the swing foot meets the floor before the "
+        "planned touch-down whatever else the command answers. Only the plan's torque "
+        "removes it, and a command that carries it is stiff_ff's.",
+    ]
+    return lines
+
+
 def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
     """Markdown of the flat 2 s walk's CoP error, decomposed (module doc)."""
     plan = plan_walk(spec, GaitParams.nominal(spec, STEP_TIME, steps=STEPS))
@@ -251,6 +326,7 @@ def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
             f"| {name} | {share:.1%} | {rms * 1e3:.2f} | {peak * 1e3:.1f} | {part:.0%} |"
             for name, share, rms, peak, part in by_window(c, plan)
         ]
+    lines += ladder_section(plan)
     lift, touch, typical = zmp_jumps(plan)
     lines += [
         "",

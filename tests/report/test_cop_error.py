@@ -4,14 +4,19 @@ import numpy as np
 import pytest
 
 from bench.report.cop_error import (
+    LADDER,
     WINDOW,
     WINDOWS,
     by_window,
     cop_error_report,
+    lead_torque,
     phase_windows,
     run_case,
+    simulate,
     zmp_jumps,
 )
+from bench.sim.model import servo_settings
+from planner.joints import stance_swing_to_left_right
 from planner.plan import plan_walk
 from planner.trajectory import GaitParams
 
@@ -62,3 +67,24 @@ def test_the_report_names_its_command_and_every_case(spec):
         assert label in text
     assert "## Touch-down" in text
     assert "## Double support: the plan moves a loaded foot" in text
+
+
+def test_the_ladders_last_rung_is_stiff_ffs_command(plan):
+    """stiff with every lead term and the floor's give and sink plays stiff_ff's command
+    bit for bit (nothing is clipped at 50 N m), so the ladder ends where stiff_ff is."""
+    terms, floor_ff, _ = LADDER[-1]
+    laddered = simulate(plan, "stiff", floor_ff=floor_ff, leads=terms)
+    fed = simulate(plan, "stiff_ff")
+    np.testing.assert_array_equal(laddered.q_ref, fed.q_ref)
+    np.testing.assert_array_equal(laddered.sensors.cop, fed.sensors.cop)
+
+
+def test_each_lead_term_moves_the_command_by_its_lag(spec, plan):
+    """A term's lead is its torque / kp: the rate term is kv q̇ / kp on every joint."""
+    servo = servo_settings(spec, "stiff")
+    rate = lead_torque(plan, servo, ("rate",))
+    expected = stance_swing_to_left_right(servo.kv * plan.qd, plan.stance)
+    np.testing.assert_allclose(rate, expected, rtol=1e-15)
+    both = lead_torque(plan, servo, ("torque", "rate"))
+    torque = stance_swing_to_left_right(plan.tau, plan.stance)
+    np.testing.assert_allclose(both, torque + expected, atol=1e-12)
