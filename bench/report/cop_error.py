@@ -27,6 +27,10 @@ where the robot stands) apart:
   with all four the command is ``stiff_ff``'s, bit for bit (the loop's 50 N m are never
   reached, so nothing is clipped);
 * the plan's own ZMP jumps at the phase changes (its lean's cubic changes λ̈ there);
+* ``servo_ff``'s early landing and the joints' dry friction (``friction_section``): the
+  walk with MuJoCo's friction loss, without it, and with f s / kp added to the command
+  (s ``friction_sign``, with or without a still joint's last sign held), flat and on a
+  slope;
 * the soft contact: the same walks with MuJoCo's contact time constant (``solref``,
   0.02 s by default) and time step made smaller (a stiffer floor, finer steps);
 * double support: how far the plan moves its rear sole sideways there
@@ -36,7 +40,7 @@ where the robot stands) apart:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -84,6 +88,16 @@ LADDER = (
     (("rate", "rotor"), "sink", "+ A q̈ / kp (the rotor's inertia)"),
     (("torque", "rotor", "rate"), "sink", "+ τ / kp (the static lag): stiff_ff"),
 )
+# servo_ff and the joints' dry friction: (friction loss as the spec's, the friction fed
+# forward: None, "moving" (0 where the plan holds a joint still) or "held", label)
+FRICTION_CASES = (
+    (True, None, "servo_ff"),
+    (False, None, "servo_ff, the joints' friction loss 0"),
+    (True, "moving", "+ f s / kp, s the sign of the planned speed"),
+    (True, "held", "+ f s / kp, a still joint's last sign held"),
+)
+FRICTION_SLOPES = (0.0, np.deg2rad(10.0))  # [rad]
+REST = 1e-9  # a joint is still below this share of its peak planned speed (roundoff)
 # (solref time constant [s], time step [s]); MuJoCo keeps the time constant ≥ 2 steps
 CONTACTS = ((0.02, 0.001), (0.02, 0.00025), (0.01, 0.0005), (0.005, 0.00025), (0.002, 0.00025))
 WINDOWS = (
@@ -120,12 +134,35 @@ def lead_torque(plan: Plan, servo: Servo, terms: tuple[str, ...]) -> np.ndarray:
     return stance_swing_to_left_right(total, plan.stance)
 
 
+def friction_sign(qd: np.ndarray, *, held: bool) -> np.ndarray:
+    """Sign of the motion each joint's dry friction resists, (n, k): the planned speed's,
+    0 where the plan holds the joint still; with ``held`` the sign of its last motion
+    there (0 before its first).
+
+    A position loop with dry friction f stops a joint short of its command, at the edge
+    of the deadband f / kp it approached from; pushing from that side puts it on its
+    command, if the load has not moved it across the band since. Still is |q̇| ≤ ``REST``
+    × the joint's peak |q̇|: the splines' roundoff (the lean's rate is ±1e-15 rad/s at
+    each lift-off, against 0.1-2 rad/s when it moves), whose sign is noise.
+    """
+    qd = np.asarray(qd, dtype=float)
+    peak = np.abs(qd).max(axis=0, initial=0.0)
+    s = np.where(np.abs(qd) > REST * peak, np.sign(qd), 0.0)
+    if not held:
+        return s
+    rows = np.arange(s.shape[0])[:, None]
+    last = np.maximum.accumulate(np.where(s != 0, rows, 0), axis=0)  # last moving row
+    return np.take_along_axis(s, last, axis=0)
+
+
 def simulate(
     plan: Plan,
     actuators: str,
     *,
     floor_ff: str | None = None,
     leads: tuple[str, ...] = (),
+    joint_friction: bool = True,
+    friction_ff: str | None = None,
     timeconst: float | None = None,
     timestep: float = 0.001,
 ) -> Recording:
@@ -141,6 +178,9 @@ def simulate(
         leads: ``lead_torque``'s terms, / kp, added to the command of a mode without
             feedforward before the floor's offsets (the order in which
             ``commands_and_aim`` adds a "_ff" mode's).
+        joint_friction: False: the joints' friction loss set to 0 in MuJoCo.
+        friction_ff: The dry friction f added to the command as f s / kp: None none,
+            "moving" or "held" (``friction_sign``'s ``held``).
     """
     model = build_model(plan, friction=FRICTION, actuators=actuators, timestep=timestep)
     if timeconst is not None:
@@ -155,6 +195,12 @@ def simulate(
         if servo.feedforward:
             raise ValueError(f"leads {leads!r}: only for a mode without feedforward")
         q_ref = q_ref + on_rows(t, plan, lead_torque(plan, servo, leads)) / servo.kp
+    if not joint_friction:
+        model.dof_frictionloss[:] = 0.0
+    if friction_ff is not None:
+        sign = friction_sign(plan.qd, held=friction_ff == "held")
+        friction = stance_swing_to_left_right(servo.frictionloss * sign, plan.stance)
+        q_ref = q_ref + on_rows(t, plan, friction) / servo.kp
     if floor_ff not in (None, own, "rigid"):
         aim = on_rows(t, plan, floor_feedforward(plan, floor, touchdown=floor_ff == "sink"))
         q_ref = q_ref + aim
@@ -238,6 +284,52 @@ def double_support_slide(plan: Plan, case: Case) -> tuple[float, float, float]:
             ratio = np.hypot(force[:, 0], force[:, 1]) / force[:, 2]
         limited.append(np.mean(ratio[force[:, 2] > 0] >= 0.99 * FRICTION))
     return float(planned), float(simulated), float(np.mean(limited))
+
+
+def friction_section(spec: RobotSpec) -> list[str]:
+    """Markdown lines: ``servo_ff``'s landings with and without the joints' dry friction."""
+    servo = servo_settings(spec, "servo_ff")
+    lines = [
+        "",
+        "## servo_ff's landing: the joints' dry friction",
+        "",
+        f"`servo_ff` feeds the torque forward but not the joints' dry friction (the spec's "
+        f"friction loss f = {servo.frictionloss:g} N m): a joint comes to rest anywhere in "
+        f"its deadband |q_ref − q| ≤ f / kp = {servo.frictionloss / servo.kp * 1e3:.2f} mrad. "
+        f"{STEP_TIME:g} s steps, μ {FRICTION:g}, {STEPS} steps; each landing's first contact "
+        "against the planned touch-down:",
+        "",
+        "| slope [°] | command | landings [ms] | RMS [mm] | simulated |",
+        "|---|---|---|---|---|",
+    ]
+    for slope in FRICTION_SLOPES:
+        params = replace(GaitParams.nominal(spec, STEP_TIME, steps=STEPS), slope=slope)
+        plan = plan_walk(spec, params)
+        for joint_friction, friction_ff, label in FRICTION_CASES:
+            c = run_case(
+                plan,
+                "servo_ff",
+                label,
+                joint_friction=joint_friction,
+                friction_ff=friction_ff,
+            )
+            early, _ = touch_downs(plan, c.recording)
+            landings = ", ".join("–" if np.isnan(e) else f"{e * 1e3:+.0f}" for e in early)
+            lines.append(
+                f"| {np.rad2deg(slope):g} | {label} | {landings} | "
+                f"{c.result.zmp_rms * 1e3:.2f} | {c.result.simulated_verdict} |"
+            )
+    lines += [
+        "",
+        "Without the friction loss the swing sole lands on time: the early landing is the "
+        "deadband. Feeding f forward on the moving joints changes nothing: the joints that "
+        "matter are the ones the plan holds still (the ankle rolls while the lean is "
+        "held). Holding a still joint's last sign lands some steps on time and others "
+        "late: where a joint rests inside its deadband depends on how the load moved it "
+        "since it stopped (the real foot's load is not the plan's split at lift-off), "
+        "which no command computed from the plan knows. `servo_ff` is left without it.",
+    ]
+    return lines
 
 
 def ladder_section(plan: Plan) -> list[str]:
@@ -327,6 +419,7 @@ def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
             for name, share, rms, peak, part in by_window(c, plan)
         ]
     lines += ladder_section(plan)
+    lines += friction_section(spec)
     lift, touch, typical = zmp_jumps(plan)
     lines += [
         "",
