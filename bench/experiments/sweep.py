@@ -48,7 +48,7 @@ import numpy as np
 from bench.experiments.batch import Batch, Stopped, duration, run_batch
 from bench.experiments.executor import one_line
 from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER
+from bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -283,10 +283,12 @@ def run_sweep(
         return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
     result = run_batch(
-        replace(  # a sweep that names a controller has one more column (sweep_table.py)
+        replace(  # a controller or command noise adds a column (sweep_table.py)
             SWEEP_BATCH,
             source=config.source,
-            fmt=SWEEP_CONTROLLER if config.closed_loop else SWEEP,
+            fmt=SWEEP_CONTROLLER
+            if config.closed_loop
+            else (SWEEP_NOISE if config.noisy else SWEEP),
         ),
         config.trials,
         total,

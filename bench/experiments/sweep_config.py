@@ -4,7 +4,8 @@ Format (degrees at this edge, like the CLI)::
 
     description = "what this sweep is for"   # optional, free text
     steps = 4          # steps per walk, >= 1 (4)
-    seed = 0           # recorded with every row, >= 0 (0)
+    seed = 0           # recorded with every row, >= 0, or a list of them: each trial per seed (0)
+    command_noise = 0  # [deg], σ of white noise on every command row, in [0, 0.5] (0)
 
     [grid]             # the product of these lists; a key left out takes its default
     step_time = [1.0, 0.5]                 # [s], > 0 (1.0, the nominal step time)
@@ -37,6 +38,13 @@ of the (scaled) robot spec, not its path; editing a spec file gives new ids. A
 ``controller`` enters the hash only when one is set, so open-loop ids are the same
 with or without the key; a sweep that names a controller anywhere gets a
 ``controller`` column in its table (``sweep_table.CONTROLLER_COLUMNS``).
+
+Command noise (``playback.noisy``) probes how much of a verdict the simulation's last
+bits decide: with ``command_noise`` > 0 every open-loop trial's commands get white
+noise of that σ, seeded by its ``trial_id``, so each seed of a list is a replica of
+the sweep. The noise enters the hash only when set, and such a sweep's table has a
+``command_noise_deg`` column (``sweep_table.NOISE_COLUMNS``); it is refused beside a
+controller (the closed loop's commands are its own).
 """
 
 from __future__ import annotations
@@ -47,6 +55,7 @@ from functools import cached_property
 from pathlib import Path
 
 from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
+    AXES,
     TIMESTEP,
     Body,
     Box,
@@ -61,7 +70,8 @@ from planner.spec import LINK_NAMES, RobotSpec, load_spec
 
 SWEEPS_DIR = Path(__file__).parent / "sweeps"
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
-TOP_KEYS = ("description", "steps", "seed", "grid", "trial")
+TOP_KEYS = ("description", "steps", "seed", "command_noise", "grid", "trial")
+MAX_NOISE_DEG = 0.5  # [deg] (``trial.MAX_COMMAND_NOISE``)
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
     "step_time": 1.0,
@@ -89,18 +99,25 @@ class SweepConfig:
 
     source: str
     steps: int
-    seed: int
+    seeds: tuple[int, ...]
     boxes: tuple[Box, ...] = field(repr=False)
     description: str = ""
+    command_noise_deg: float = 0.0  # [deg]
 
     @cached_property
     def trials(self) -> TrialSet:
-        return TrialSet(self.boxes, self.steps, self.seed)
+        return TrialSet(self.boxes, self.steps, self.command_noise_deg)
+
+    @property
+    def noisy(self) -> bool:
+        """The commands get noise (its table has a ``command_noise_deg`` column)."""
+        return self.command_noise_deg > 0
 
     @property
     def closed_loop(self) -> bool:
         """Some trial names a controller (its table has a ``controller`` column)."""
-        return any(value is not None for box in self.boxes for _, value in box.values[-1])
+        k = AXES.index("controller")
+        return any(value is not None for box in self.boxes for _, value in box.values[k])
 
 
 def load_sweep(path: str | Path | None = None) -> SweepConfig:
@@ -123,11 +140,17 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
     """
     _known(data, TOP_KEYS, "", source)
     steps = data.get("steps", 4)
-    seed = data.get("seed", 0)
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise SweepError(f"{source}: steps = {steps!r}: must be an integer >= 1")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise SweepError(f"{source}: seed = {seed!r}: must be an integer >= 0")
+    seeds = _seeds(data.get("seed", 0), source)
+    noise = data.get("command_noise", 0)
+    if isinstance(noise, bool) or not isinstance(noise, int | float) or not math.isfinite(noise):
+        raise SweepError(f"{source}: command_noise = {noise!r}: must be a finite number of deg")
+    noise = float(noise)
+    if not 0 <= noise <= MAX_NOISE_DEG:
+        raise SweepError(
+            f"{source}: command_noise = {noise:g} deg: must lie in [0, {MAX_NOISE_DEG:g}] deg"
+        )
     description = data.get("description", "")
     if not isinstance(description, str):
         raise SweepError(f"{source}: description = {description!r}: must be a string")
@@ -149,15 +172,27 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
             if not isinstance(values, list) or not values:
                 raise SweepError(f"{source}: {where}.{key} = {values!r}: must be a non-empty list")
             axes[key] = values
-        boxes.append(_box(axes, steps, seed, robots, base_dir, f"{source}: {where}"))
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}"))
     for where, table in singles:
         _known(table, TRIAL_KEYS, f"{where}.", source)
         axes = {key: [table.get(key, DEFAULTS[key])] for key in TRIAL_KEYS}
-        boxes.append(_box(axes, steps, seed, robots, base_dir, f"{source}: {where}"))
-    return SweepConfig(source, steps, seed, tuple(boxes), description)
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}"))
+    return SweepConfig(source, steps, seeds, tuple(boxes), description, noise)
 
 
-def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
+def _seeds(value, source: str) -> tuple[int, ...]:
+    """The top-level ``seed``: an integer >= 0 or a non-empty list of distinct ones."""
+    values = value if isinstance(value, list) else [value]
+    what = "must be an integer >= 0 or a non-empty list of distinct ones"
+    if not values or len(set(map(repr, values))) < len(values):
+        raise SweepError(f"{source}: seed = {value!r}: {what}")
+    for seed in values:
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise SweepError(f"{source}: seed = {value!r}: {what}")
+    return tuple(values)
+
+
+def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) -> Box:
     """Check each value of each axis once; the grid as a ``Box``."""
     step_times = [_positive(v, "step_time", "s", where) for v in axes["step_time"]]
     slopes = []
@@ -178,6 +213,11 @@ def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
         for scale in axes["mass_scale"]
     ]
     controllers = [_controller(v, where) for v in axes["controller"]]
+    if noise and any(c is not None for c in controllers):
+        raise SweepError(
+            f"{where}: command_noise = {noise:g} deg with a controller: the noise is for "
+            "plans played open loop (a controller makes its own commands)"
+        )
     values = (
         _unique((repr(v), v) for v in step_times),
         _unique((repr(v), v) for v in slopes),
@@ -185,6 +225,7 @@ def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
         _unique((a, a) for a in axes["actuators"]),
         _unique((b.spec_json, b) for b in bodies),
         _unique((c or OPEN_LOOP, c) for c in controllers),
+        tuple((repr(seed), seed) for seed in seeds),
     )
     box = Box(where, values)
     # The gait's own range checks (e.g. dt <= step_time/10) of each value of
@@ -193,7 +234,7 @@ def _box(axes: dict[str, list], steps, seed, robots, base_dir, where) -> Box:
     for k, axis in enumerate(values):
         for _, value in axis[1:] if k else axis:
             combo = [*first[:k], value, *first[k + 1 :]]
-            trial = TrialSet((box,), steps, seed).make(combo)
+            trial = TrialSet((box,), steps, noise).make(combo)
             try:
                 trial.trial_spec()
             except SlopewalkError as err:

@@ -120,6 +120,8 @@ HEADER = (",".join(COLUMNS) + "\n").encode()
 # column keeps its place ("none" for a trial played open loop).
 CONTROLLER_COLUMNS = (*COLUMNS, "controller")
 CONTROLLER_HEADER = (",".join(CONTROLLER_COLUMNS) + "\n").encode()
+# A sweep with command noise: its σ [deg], as written in the sweep file, last likewise
+NOISE_COLUMNS = (*COLUMNS, "command_noise_deg")
 _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the older versions'
 # before fixed precision: a wall time, and no fidelity columns
 PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
@@ -272,30 +274,33 @@ def _header(columns) -> bytes:
 
 
 _SWEEP_VERDICTS = {"analytic_verdict": ANALYTIC_VERDICTS, "simulated_verdict": SIMULATED_VERDICTS}
-SWEEP = TableFormat(
-    "sweep",
-    COLUMNS,
-    DECIMALS,
-    _SWEEP_VERDICTS,
-    PREVIOUS_LAYOUTS,
-    ((CONTROLLER_COLUMNS, "its columns are those of a sweep with a controller key"),),
-)
-SWEEP_CONTROLLER = TableFormat(
-    "sweep",
-    CONTROLLER_COLUMNS,
-    DECIMALS,
-    _SWEEP_VERDICTS,
-    PREVIOUS_LAYOUTS,
-    ((COLUMNS, "its columns are those of a sweep without a controller key"),),
-)
+_LAYOUTS = {
+    COLUMNS: "a sweep without a controller or command_noise key",
+    CONTROLLER_COLUMNS: "a sweep with a controller key",
+    NOISE_COLUMNS: "a sweep with a command_noise key",
+}
+
+
+def _sweep_layout(columns: tuple[str, ...]) -> TableFormat:
+    others = tuple(
+        (other, f"its columns are those of {what}")
+        for other, what in _LAYOUTS.items()
+        if other != columns
+    )
+    return TableFormat("sweep", columns, DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS, others)
+
+
+SWEEP = _sweep_layout(COLUMNS)
+SWEEP_CONTROLLER = _sweep_layout(CONTROLLER_COLUMNS)
+SWEEP_NOISE = _sweep_layout(NOISE_COLUMNS)
 
 
 def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
-    """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS`` or ``CONTROLLER_COLUMNS``)."""
-    if columns == COLUMNS:
-        return SWEEP
-    if columns == CONTROLLER_COLUMNS:
-        return SWEEP_CONTROLLER
+    """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS``, ``CONTROLLER_COLUMNS`` or
+    ``NOISE_COLUMNS``)."""
+    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE):
+        if tuple(columns) == fmt.columns:
+            return fmt
     return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)
 
 

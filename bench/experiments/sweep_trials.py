@@ -45,9 +45,11 @@ class SweepTrial:
         robot: The spec path as written in the file, or "default".
         mass_scale: (group, factor) pairs in file order; () = no scaling.
         steps: Steps per walk.
-        seed: The sweep's seed, recorded with the row.
+        seed: One of the sweep's seeds, recorded with the row; it seeds the command noise.
         spec: The robot, mass scaling applied.
         controller: ``MODULE:CALLABLE`` of a closed-loop controller, or None (open loop).
+        command_noise_deg: σ of the noise on every command row [deg], as written in the
+            sweep file; 0: none.
     """
 
     step_time: float
@@ -61,6 +63,7 @@ class SweepTrial:
     spec: RobotSpec = field(repr=False, compare=False)
     spec_json: str = field(default="", repr=False, compare=False)  # spec_text(spec), if known
     controller: str | None = None
+    command_noise_deg: float = 0.0
 
     @cached_property
     def trial_id(self) -> str:
@@ -82,6 +85,8 @@ class SweepTrial:
         }
         if self.controller is not None:  # only then: open-loop ids stay what they were
             key["controller"] = self.controller
+        if self.command_noise_deg:  # likewise: ids without noise stay what they were
+            key["command_noise_deg"] = self.command_noise_deg
         text = json.dumps(key, sort_keys=True, default=float)
         text = text.replace('"\\u0000"', self.spec_json or spec_text(self.spec), 1)
         return hashlib.sha256(text.encode()).hexdigest()[:12]
@@ -103,6 +108,8 @@ class SweepTrial:
             text += f" robot {self.robot}"
         if self.controller is not None:
             text += f" controller {self.controller.rpartition(':')[2]}"
+        if self.command_noise_deg:
+            text += f" noise {self.command_noise_deg:g} deg seed {self.seed}"
         return text
 
     def gait(self) -> GaitParams:
@@ -118,6 +125,8 @@ class SweepTrial:
             actuators=self.actuators,
             timestep=TIMESTEP,
             controller=self.controller,
+            command_noise=float(np.deg2rad(self.command_noise_deg)),
+            noise_seed=int(self.trial_id, 16),  # the seed, and everything else, hashed
         )
 
     def inputs(self) -> dict:
@@ -133,6 +142,7 @@ class SweepTrial:
             "steps": self.steps,
             "seed": self.seed,
             "controller": self.controller or "none",  # written only by closed-loop sweeps
+            "command_noise_deg": self.command_noise_deg,  # written only by noisy sweeps
         }
 
 
@@ -146,7 +156,7 @@ class Body:
     spec_json: str = field(repr=False)  # its part of the trial_id text
 
 
-AXES = ("step_time", "slope", "friction", "actuators", "body", "controller")
+AXES = ("step_time", "slope", "friction", "actuators", "body", "controller", "seed")
 
 
 @dataclass(frozen=True)
@@ -205,8 +215,8 @@ class TrialSet(Sequence):
     Indexing walks from the start (for tests and small sweeps).
     """
 
-    def __init__(self, boxes: tuple[Box, ...], steps: int, seed: int):
-        self._boxes, self._steps, self._seed = boxes, steps, seed
+    def __init__(self, boxes: tuple[Box, ...], steps: int, command_noise_deg: float = 0.0):
+        self._boxes, self._steps, self._noise = boxes, steps, command_noise_deg
 
     @cached_property
     def _len(self) -> int:
@@ -234,7 +244,7 @@ class TrialSet(Sequence):
 
     def make(self, values: list) -> SweepTrial:
         """The trial of one value per axis (``AXES`` order)."""
-        step_time, slope, friction, actuators, body, controller = values
+        step_time, slope, friction, actuators, body, controller, seed = values
         return SweepTrial(
             step_time,
             slope,
@@ -243,10 +253,11 @@ class TrialSet(Sequence):
             body.robot,
             body.mass_scale,
             self._steps,
-            self._seed,
+            seed,
             body.spec,
             body.spec_json,
             controller,
+            self._noise,
         )
 
     def simulated_steps(self) -> float:

@@ -7,7 +7,8 @@ inside the polygon), the compliance-aware verdict and the predicted verdict
 (``stable``) against "does not"; both confusion tables; each disagreement of
 the predicted verdict with the measured quantities that explain it; and the
 issue's goals where the table holds their cells (flat 2 s stiff CoP RMS,
-``servo_ff`` on every cell with ≥ 5 mm planned margin within the joint limits).
+``servo_ff`` on every cell with ≥ 5 mm planned margin within the joint limits); for
+a table of several seeds of command noise, the verdicts seed by seed (``replicas``).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.report.replicas import replica_section
 from planner.errors import SlopewalkError
 from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
 
@@ -108,6 +110,7 @@ def _table_section(name: str, rows: list[dict]) -> list[str]:
             "",
         ]
     lines += [f"- {_label(r)}: {disagreement_cause(r)}" for r in wrong] or ["none"]
+    lines += replica_section(rows, _label)
     return lines + [""]
 
 

@@ -200,6 +200,8 @@ def play(
     timestep: float = 0.001,
     settle: float = SETTLE_TIME,
     hold: float = HOLD_TIME,
+    command_noise: float = 0.0,
+    noise_seed: int = 0,
 ) -> Recording:
     """Simulate ``plan`` and record it (see module doc).
 
@@ -209,6 +211,8 @@ def play(
         actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
         timestep: Simulation step [s].
         settle, hold: Hold times before and after the walk [s].
+        command_noise: σ of white noise added to every command row [rad] (``noisy``).
+        noise_seed: Seed of that noise.
     """
     return play_many(
         [plan],
@@ -218,7 +222,21 @@ def play(
         settle=settle,
         hold=hold,
         threads=1,
+        noise=[(command_noise, noise_seed)],
     )[0]
+
+
+def noisy(q_ref: np.ndarray, sigma: float, seed: int) -> np.ndarray:
+    """``q_ref`` (m, 8) [rad] plus independent normal noise of σ ``sigma`` [rad] on every
+    entry, drawn from ``numpy.random.default_rng(seed)``; ``q_ref`` itself for σ = 0.
+
+    A probe of the simulation's sensitivity, not a model of anything physical: at 1e-6
+    rad it is a thousandth of the loops' own lag, and a verdict it flips was decided by
+    the integration's last bits (``slopewalk fidelity`` counts such trials over seeds).
+    """
+    if sigma == 0:
+        return q_ref
+    return q_ref + np.random.default_rng(seed).normal(0.0, sigma, q_ref.shape)
 
 
 def play_many(
@@ -230,11 +248,13 @@ def play_many(
     settle=SETTLE_TIME,
     hold=HOLD_TIME,
     threads: int = 1,
+    noise=None,
 ) -> list[Recording]:
     """Simulate several plans, trials sharing ``threads`` MuJoCo threads.
 
     Trials with the same scene (robot, slope, friction, actuators) and length
-    share one ``rollout`` call; each scene is compiled once.
+    share one ``rollout`` call; each scene is compiled once. ``noise``: per plan
+    (σ [rad], seed) of ``noisy`` on its commands; None: none.
     """
     groups: dict[tuple, list[int]] = {}
     for i, plan in enumerate(plans):
@@ -250,6 +270,8 @@ def play_many(
         controls, aims, states, times = [], [], [], None
         for i in members:
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)
+            if noise is not None:
+                q_ref = noisy(q_ref, *noise[i])
             controls.append(q_ref)
             aims.append(aim)
             states.append(initial_state(model, plans[i]))

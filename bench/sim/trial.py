@@ -51,6 +51,19 @@ from planner.zmp import signed_margin
 G = 9.81
 
 
+MAX_COMMAND_NOISE = float(np.deg2rad(0.5))  # [rad]: beyond, not a probe of the last bits
+
+
+def check_command_noise(sigma) -> None:
+    """Raise one SceneError line unless ``sigma`` [rad] is a number in [0, MAX_COMMAND_NOISE]."""
+    if isinstance(sigma, bool) or not isinstance(sigma, int | float | np.floating):
+        raise SceneError(f"command_noise {sigma!r}: must be a number of radians")
+    if not 0 <= sigma <= MAX_COMMAND_NOISE:
+        raise SceneError(
+            f"command_noise {sigma!r} rad: must lie in [0, {MAX_COMMAND_NOISE:.4g}] rad (0.5 deg)"
+        )
+
+
 @dataclass(frozen=True)
 class TrialSpec:
     """What to simulate: a gait (``GaitParams``) on a plane of friction μ with an actuator mode.
@@ -62,6 +75,9 @@ class TrialSpec:
         timestep: Simulation step [s].
         controller: ``MODULE:CALLABLE`` of a closed-loop controller (observation -> action,
             ``bench.sim.env``), or None: the plan played open loop by ``mujoco.rollout``.
+        command_noise: σ of white noise on every open-loop command row [rad], in
+            [0, ``MAX_COMMAND_NOISE``] (``playback.noisy``); 0: none.
+        noise_seed: Seed of that noise, ≥ 0.
     """
 
     gait: GaitParams
@@ -69,10 +85,22 @@ class TrialSpec:
     actuators: str = "stiff"
     timestep: float = 0.001
     controller: str | None = None
+    command_noise: float = 0.0
+    noise_seed: int = 0
 
     def __post_init__(self) -> None:
         if self.controller is not None:
             check_controller_name(self.controller)
+        check_command_noise(self.command_noise)
+        if self.command_noise and self.controller is not None:
+            raise SceneError(
+                f"command_noise {self.command_noise!r} rad with controller "
+                f"{self.controller!r}: noise is for the plan played open loop"
+            )
+        if isinstance(self.noise_seed, bool) or not isinstance(self.noise_seed, int | np.integer):
+            raise SceneError(f"noise_seed {self.noise_seed!r}: must be an integer >= 0")
+        if self.noise_seed < 0:
+            raise SceneError(f"noise_seed {self.noise_seed!r}: must be an integer >= 0")
         if not 0 < self.timestep <= 0.005:
             raise SceneError(f"timestep {self.timestep!r} s: must lie in (0, 0.005]")
         check_scene_options(
@@ -138,6 +166,8 @@ class TrialResult:
         }
         if self.trial.controller is None:  # open loop: the output as before controllers
             del out["trial"]["controller"]
+        if not self.trial.command_noise:  # no noise: the output as before it existed
+            del out["trial"]["command_noise"], out["trial"]["noise_seed"]
         out["events"] = [{**asdict(e), "phase": self.phase(e.time)} for e in self.events]
         out["predicted_events"] = [asdict(e) for e in self.predicted_events]
         out["unplanned_support_s"] = self.unplanned_support_s
@@ -247,7 +277,12 @@ def run_trial(
 
         recording = play_controller(spec, trial, plan)
     recording = recording or play(
-        plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
+        plan,
+        friction=trial.friction,
+        actuators=trial.actuators,
+        timestep=trial.timestep,
+        command_noise=trial.command_noise,
+        noise_seed=trial.noise_seed,
     )
     return compare(plan, trial, recording, wall_s=time.perf_counter() - start, predict=predict)
 

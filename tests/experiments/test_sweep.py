@@ -469,3 +469,24 @@ def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
     }
     with pytest.raises(SweepError, match="columns are those of a sweep with a controller key"):
         parse(data, tmp_path)  # an open-loop sweep will not resume into it
+
+
+# --- command noise -----------------------------------------------------------------------------
+
+
+def test_a_noisy_sweep_writes_each_seed_and_its_noise(tmp_path):
+    """Two seeds of 0.05° noise (large, to move every row's numbers): two rows per trial,
+    the noise column last, and the seeds' walks differ; the table reads as a noisy one."""
+    from bench.experiments.sweep_table import NOISE_COLUMNS, sweep_format
+
+    config = tmp_path / "n.toml"
+    config.write_text("seed = [0, 1]\ncommand_noise = 0.05\nsteps = 1\n[grid]\nstep_time = [1.0]\n")
+    assert main(["sweep", str(config), "--workers", "1", "--out", str(tmp_path / "o")]) == 0
+    table = tmp_path / "o" / "sweep.csv"
+    rows = list(csv.DictReader(table.open()))
+    assert table.read_text().splitlines()[0] == ",".join(NOISE_COLUMNS)
+    assert [(r["seed"], r["command_noise_deg"]) for r in rows] == [("0", "0.05"), ("1", "0.05")]
+    assert rows[0]["tracking_rms_deg"] != rows[1]["tracking_rms_deg"]
+    assert len(sweep_format(NOISE_COLUMNS).read_rows(table)) == 2
+    with pytest.raises(SweepError, match="columns are those of a sweep with a command_noise key"):
+        sweep_format(COLUMNS).read_rows(table)

@@ -8,6 +8,7 @@ import tracemalloc
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bench.experiments.sweep_config import (
@@ -20,6 +21,7 @@ from bench.experiments.sweep_config import (
 )
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
+ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"
 
 
 def _parse(data: dict, base_dir: Path = Path(".")):
@@ -37,7 +39,7 @@ def test_grid_is_the_product_and_defaults_fill_the_rest():
     }
     t = config.trials[0]
     assert (t.slope_deg, t.actuators, t.robot, t.mass_scale) == (0.0, "stiff", "default", ())
-    assert (t.steps, t.seed, config.steps, config.seed) == (4, 0, 4, 0)
+    assert (t.steps, t.seed, config.steps, config.seeds) == (4, 0, 4, (0,))
 
 
 def test_trials_and_grids_are_a_deduplicated_union():
@@ -138,6 +140,24 @@ def test_shipped_sweeps_parse():
         ({"grid": {"controller": ["ankle"]}}, "grid.controller: controller 'ankle': must read"),
         ({"trial": [{"controller": "no_such:f"}]}, "no module named 'no_such'"),
         ({"grid": {"controller": [None, 3]}}, "grid.controller = None: must be"),
+        ({"grid": {}, "seed": []}, "seed = []: must be an integer >= 0 or a non-empty list"),
+        ({"grid": {"slope": [0]}, "seed": [1, 1]}, "seed = [1, 1]: must be an integer >= 0 or"),
+        ({"grid": {"slope": [0]}, "seed": [0, -1]}, "seed = [0, -1]: must be"),
+        ({"grid": {"slope": [0]}, "seed": [1.5]}, "seed = [1.5]: must be"),
+        ({"grid": {"slope": [0]}, "seed": "x"}, "seed = 'x': must be"),
+        ({"grid": {"slope": [0]}, "command_noise": -1e-4}, "command_noise = -0.0001 deg: must lie"),
+        (
+            {"grid": {"slope": [0]}, "command_noise": 1},
+            "command_noise = 1 deg: must lie in [0, 0.5]",
+        ),
+        ({"grid": {"slope": [0]}, "command_noise": float("nan")}, "command_noise = nan: must be"),
+        ({"grid": {"slope": [0]}, "command_noise": float("inf")}, "command_noise = inf: must be"),
+        ({"grid": {"slope": [0]}, "command_noise": "1e-4"}, "command_noise = '1e-4': must be a"),
+        ({"grid": {"slope": [0]}, "command_noise": True}, "command_noise = True: must be a"),
+        (
+            {"grid": {"controller": [ANKLE]}, "command_noise": 1e-4},
+            "command_noise = 0.0001 deg with a controller",
+        ),
     ],
 )
 def test_bad_sweep_files_are_refused_naming_the_key(data, message):
@@ -230,9 +250,6 @@ def test_a_million_trial_grid_is_counted_without_expanding_it(tmp_path):
     )
 
 
-ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"
-
-
 def test_open_loop_ids_do_not_change_with_the_controller_key():
     """The paper's ids are those of the committed table, with or without controller = "none"."""
     committed = Path(__file__).parents[2] / "results" / "sweep.csv"
@@ -254,3 +271,31 @@ def test_a_controller_axis_multiplies_the_trials_and_reaches_the_trial_spec():
     assert trials[1].trial_spec().controller == ANKLE
     assert trials[1].label.endswith("controller ankle_cop_feedback")
     assert trials[1].inputs()["controller"] == ANKLE and trials[0].inputs()["controller"] == "none"
+
+
+# --- seeds and command noise -------------------------------------------------------------------
+
+
+def test_a_seed_list_plays_every_trial_once_per_seed():
+    one = _parse({"seed": 3, "grid": {"step_time": [1.0, 0.5]}})
+    both = _parse({"seed": [3, 5], "grid": {"step_time": [1.0, 0.5]}})
+    trials = list(both.trials)
+    assert len(both.trials) == len(trials) == 4 and both.seeds == (3, 5)
+    assert [(t.step_time, t.seed) for t in trials] == [(1.0, 3), (1.0, 5), (0.5, 3), (0.5, 5)]
+    assert [t.trial_id for t in trials if t.seed == 3] == [t.trial_id for t in one.trials]
+    assert len({t.trial_id for t in trials}) == 4
+
+
+def test_command_noise_enters_the_id_the_table_and_the_trial_only_when_set():
+    grid = {"grid": {"step_time": [1.0]}}
+    plain, zero = _parse(grid), _parse(grid | {"command_noise": 0})
+    noisy = _parse(grid | {"command_noise": 1e-4, "seed": [0, 1]})
+    assert [t.trial_id for t in plain.trials] == [t.trial_id for t in zero.trials]
+    assert not zero.noisy and noisy.noisy
+    a, b = noisy.trials
+    assert a.trial_id not in {t.trial_id for t in plain.trials} and a.trial_id != b.trial_id
+    spec_a, spec_b = a.trial_spec(), b.trial_spec()
+    assert spec_a.command_noise == pytest.approx(np.deg2rad(1e-4), rel=1e-15)
+    assert (spec_a.noise_seed, spec_b.noise_seed) == (int(a.trial_id, 16), int(b.trial_id, 16))
+    assert a.inputs()["command_noise_deg"] == 1e-4 and "noise 0.0001 deg seed 1" in b.label
+    assert plain.trials[0].trial_spec().command_noise == 0.0
