@@ -60,19 +60,23 @@ def test_sweep_doc_has_every_key_with_the_codes_default(tmp_path):
     for key in TRIAL_KEYS:
         assert _toml_value(rows[key][1]) == DEFAULTS[key], key
     config = sweep_from_dict({"trial": [{}]}, base_dir=tmp_path)
-    for key in ("steps", "seed", "description"):
+    for key in ("steps", "description"):
         assert _toml_value(rows[key][1]) == getattr(config, key), key
+    assert (_toml_value(rows["seed"][1]),) == config.seeds
+    assert _toml_value(rows["command_noise"][1]) == config.command_noise_deg
 
 
 def test_sweep_doc_example_is_a_valid_sweep(tmp_path):
     """The example parses, robot path included, into the trials its comments promise."""
-    (example,) = re.findall(r"```toml\n(.*?)```", SWEEP_DOC.read_text(), re.S)
+    example, replicas = re.findall(r"```toml\n(.*?)```", SWEEP_DOC.read_text(), re.S)
     (robot,) = re.findall(r'robot = "([^"]+)"', example)
     (tmp_path / robot).parent.mkdir(parents=True)
     long_legs = default_spec_path().read_text().replace("\nthigh = 0.111", "\nthigh = 0.15")
     (tmp_path / robot).write_text(long_legs)  # a copy of the paper's would be a duplicate
     config = sweep_from_dict(tomllib.loads(example), base_dir=tmp_path)
     assert len(config.trials) == 12 + 2 + 2
+    noisy = sweep_from_dict(tomllib.loads(replicas) | {"trial": [{}]}, base_dir=tmp_path)
+    assert len(noisy.trials) == 8 and noisy.noisy  # the replicas snippet: 8 seeds
 
 
 @pytest.mark.parametrize("doc", [ROBOT_DOC, SWEEP_DOC])

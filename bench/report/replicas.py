@@ -23,8 +23,8 @@ TRIAL_INPUTS = ("step_time", "slope_deg", "friction", "actuators", "robot", "mas
 
 
 def seeds_of(rows: list[dict]) -> list:
-    """The distinct seeds of ``rows``, in order of first appearance."""
-    return list(dict.fromkeys(r["seed"] for r in rows))
+    """The distinct seeds of ``rows``, in order of first appearance (0 for a row without)."""
+    return list(dict.fromkeys(r.get("seed", 0) for r in rows))
 
 
 def _walks(verdict) -> bool:
@@ -72,7 +72,7 @@ def replica_section(rows: list[dict], label) -> list[str]:
     ]
     shares = []
     for seed in seeds:
-        sub = [r for r in rows if r["seed"] == seed]
+        sub = [r for r in rows if r.get("seed", 0) == seed]
         paper = sum(_agrees(r, "analytic_verdict") for r in sub)
         predicted = sum(_agrees(r, "predicted_verdict") for r in sub)
         shares.append((predicted / len(sub), predicted, len(sub)))
