@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.report.replicas import replica_section
+from bench.report.replicas import replica_section, trial_key, undecided
 from planner.errors import SlopewalkError
 from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
 
@@ -66,7 +66,9 @@ def fidelity_report(tables: dict[str, list[dict]], *, command: str = "") -> str:
             raise FidelityError(
                 f"{name}: no column {missing[0]} (a sweep table of an older version; re-run it)"
             )
-        lines += _table_section(name, rows)
+    noisy = undecided(tables)
+    for name, rows in tables.items():
+        lines += _table_section(name, rows, noisy)
     return "\n".join(lines) + "\n"
 
 
@@ -86,7 +88,9 @@ def _walks(verdict) -> bool:
     return verdict == "stable"
 
 
-def _table_section(name: str, rows: list[dict]) -> list[str]:
+def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> list[str]:
+    """Markdown of one table; ``noisy``: ``replicas.undecided`` of the report's tables."""
+    noisy = noisy or {}
     rows = [r for r in rows if r["simulated_verdict"] != "error"]
     n = len(rows)
     lines = [f"## {name}: {n} trials", "", "| verdict | agrees | share |", "|---|---|---|"]
@@ -105,11 +109,23 @@ def _table_section(name: str, rows: list[dict]) -> list[str]:
     lines += ["", f"### Disagreements of the predicted verdict ({len(wrong)})", ""]
     if wrong:
         classes = Counter(cause_class(r) for r in wrong)
+        on_noise = sum(trial_key(r) in noisy for r in wrong)
         lines += [
-            "By measured cause: " + ", ".join(f"{k} {v}" for k, v in classes.most_common()),
+            "By measured cause: "
+            + ", ".join(f"{k} {v}" for k, v in classes.most_common())
+            + (
+                f"; {on_noise} of them on trials whose simulated verdict command noise "
+                "decides (MuJoCo does not decide them)"
+                if on_noise
+                else ""
+            ),
             "",
         ]
-    lines += [f"- {_label(r)}: {disagreement_cause(r)}" for r in wrong] or ["none"]
+    lines += [
+        f"- {_label(r)}: {disagreement_cause(r)}"
+        + (f"; MuJoCo does not decide it: {noisy[trial_key(r)]}" if trial_key(r) in noisy else "")
+        for r in wrong
+    ] or ["none"]
     lines += replica_section(rows, _label)
     return lines + [""]
 

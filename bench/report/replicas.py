@@ -12,6 +12,9 @@ models. ``replica_section(rows)`` writes, for a table of more than one seed:
 * the trials whose simulated verdict differs between seeds, with the share of
   seeds in which they walk, and how many of the predicted verdict's disagreements
   fall on them.
+
+``undecided(tables)`` collects those trials over a report's tables, so that a
+disagreement on one of them in a table of one seed says MuJoCo does not decide it.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ def _agrees(r, column: str) -> bool:
 
 
 def _trial(r) -> tuple:
-    return tuple(r[c] for c in TRIAL_INPUTS)
+    return tuple(r.get(c) for c in TRIAL_INPUTS)
 
 
 def flipping(rows: list[dict]) -> dict[tuple, list[dict]]:
@@ -102,3 +105,25 @@ def replica_section(rows: list[dict], label) -> list[str]:
             f"(else {', '.join(others)}); predicted {group[0]['predicted_verdict']}"
         )
     return lines if flips else [*lines, "none"]
+
+
+def undecided(tables: dict[str, list[dict]]) -> dict[tuple, str]:
+    """Trial inputs → "walks under k/K seeds of command noise (table)", for each trial that
+    flips in a table of several seeds among ``tables`` (name → rows): a disagreement on
+    such a trial in any table is one MuJoCo itself does not decide."""
+    out: dict[tuple, str] = {}
+    for name, rows in tables.items():
+        rows = [r for r in rows if r["simulated_verdict"] != "error"]
+        if len(seeds_of(rows)) < 2:
+            continue
+        for key, group in flipping(rows).items():
+            walked = sum(_walks(r["simulated_verdict"]) for r in group)
+            out.setdefault(
+                key, f"walks under {walked}/{len(group)} seeds of command noise ({name})"
+            )
+    return out
+
+
+def trial_key(r) -> tuple:
+    """The inputs that make ``r``'s trial, seed and noise aside (``TRIAL_INPUTS``)."""
+    return _trial(r)

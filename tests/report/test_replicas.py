@@ -52,3 +52,22 @@ def test_the_section_counts_each_seed_and_names_the_flipping_trials():
 
 def test_one_seed_has_no_section():
     assert replica_section([r for r in ROWS if r["seed"] == 0], _label) == []
+
+
+def test_a_disagreement_in_a_one_seed_table_says_when_the_noise_decides_its_trial():
+    from bench.report.fidelity import fidelity_report
+    from bench.report.replicas import undecided
+
+    assert undecided({"noise": ROWS}) == {
+        (1.0, 0.0, 1.0, "stiff", "default", ""): "walks under 2/3 seeds of command noise (noise)"
+    }
+    assert undecided({"one seed": ROWS[:1]}) == {}
+    extra = dict.fromkeys(
+        ("predicted_events", "events", "predicted_rotation_deg", "compliant_min_margin_mm"), 0.0
+    ) | {"compliant_verdict": "stable", "unplanned_support_s": 0.0, "tracking_rms_deg": 0.1}
+    extra |= {"analytic_min_margin_mm": 1.0, "first_event_time_s": 1.0}
+    extra |= {"simulated_max_tilt_deg": 0.0}
+    single = [ROWS[2] | extra | {"seed": 0}]  # the flipping trial, one seed, disagreeing
+    text = fidelity_report({"single": single, "noise": [r | extra for r in ROWS]})
+    assert "MuJoCo does not decide it: walks under 2/3 seeds of command noise (noise)" in text
+    assert "1 of them on trials whose simulated verdict command noise decides" in text
