@@ -20,7 +20,7 @@ import numpy as np
 from bench.sim.floor import foot_loads
 from bench.sim.model import Servo, servo_settings
 from bench.sim.playback import Recording, on_rows
-from bench.sim.support import planned_contact
+from bench.sim.support import contact_differences
 from planner.joints import LEFT, stance_swing_to_left_right
 from planner.plan import Plan
 
@@ -35,8 +35,7 @@ def lost_contact(plan: Plan, recording: Recording, until: float = np.inf):
     standing = (t >= plan.t[0]) & (t <= plan.t[-1]) & (t < until)
     dt = float(np.median(np.diff(t)))
     idx = np.clip(np.searchsorted(plan.t, t - 1e-9), 0, plan.t.size - 1)
-    air = (recording.sensors.foot_force[..., 2] <= 0.0) & planned_contact(plan, t)
-    air &= standing[:, None]
+    _, air = contact_differences(plan, recording, standing)
     stance_is_left = plan.stance[idx] == LEFT
     stance_foot = np.column_stack([stance_is_left, ~stance_is_left])  # (m, 2)
     double = plan.double_support[idx][:, None]

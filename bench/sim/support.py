@@ -57,12 +57,19 @@ def support_difference(plan: Plan, recording: Recording, standing: np.ndarray) -
     """
     t = recording.t
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    extra, missed = contact_differences(plan, recording, standing)
+    return Support(float(extra.sum() * dt), float(missed.sum() * dt))
+
+
+def contact_differences(
+    plan: Plan, recording: Recording, standing: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per row and foot (left, right), on rows marked ``standing``: in contact while the
+    plan has the foot lifted, and in the air while the plan has it down, (m, 2) each."""
     contact = recording.sensors.foot_force[..., 2] > 0.0
-    planned = planned_contact(plan, t)
+    planned = planned_contact(plan, recording.t)
     rows = standing[:, None]
-    extra = (contact & ~planned & rows).sum() * dt
-    missed = (~contact & planned & rows).sum() * dt
-    return Support(float(extra), float(missed))
+    return contact & ~planned & rows, ~contact & planned & rows
 
 
 def touch_downs(plan: Plan, recording: Recording) -> tuple[np.ndarray, np.ndarray]:
