@@ -345,6 +345,11 @@ def controllers(args) -> None:
         raise ControllerError("--min-step-time: only with --envelope")
     envelope = _envelope_gaits(args) if args.envelope else None  # checked before any trial
     config = load_sweep(args.config)
+    if config.noisy:
+        raise ControllerError(
+            f"{config.source}: command_noise = {config.command_noise_deg:g} deg: the "
+            "controllers make their own commands; give a sweep file without command_noise"
+        )
     table = compare_controllers(config, names, workers=args.workers)
     source = args.config or in_package(DEFAULT_SWEEP)
     command = " ".join(

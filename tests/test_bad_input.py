@@ -62,6 +62,8 @@ INPUTS = {  # file name in {in} -> content
     "empty_list.json": "[]",
     "broken.json": "[{",
     "a_file": "not a folder\n",
+    "noisy_sweep.toml": "command_noise = 1e-4\n" + ENVELOPE,
+    "nan_noise_sweep.toml": "command_noise = nan\n" + ENVELOPE,
     "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
     "envelope_name.toml": ENVELOPE + 'controller = ["ankle_cop_feedback"]\n',
     "envelope_number.toml": ENVELOPE + "controller = [1]\n",
@@ -184,6 +186,11 @@ CASES = [
         "grid.controller: controller 'ankle_cop_feedback': must read MODULE:CALLABLE",
     ),
     (["controllers", "--min-step-time", "0.5"], "--min-step-time: only with --envelope"),
+    (
+        ["controllers", "{in}/noisy_sweep.toml"],
+        "command_noise = 0.0001 deg: the controllers make their own commands",
+    ),
+    (["sweep", "{in}/nan_noise_sweep.toml"], "command_noise = nan: must be a finite number"),
     (
         ["controllers", "--envelope", "{in}/a_file", "--min-step-time", "0"],
         "--min-step-time: 0: must lie in (0, 60] s",
