@@ -14,6 +14,7 @@ import textwrap
 
 from bench import commands
 from bench.flags import (
+    COMMAND_NOISE_DEG,
     DOCS,
     GENERATIONS,
     POPULATION,
@@ -113,9 +114,21 @@ def build_parser() -> argparse.ArgumentParser:
         "      --series t.npz --record t.rrd",
         "slopewalk trial --step-time 0.6 --controller "
         "bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
+        "slopewalk trial --step-time 1 --slope 20 --command-noise 1e-4 --noise-seed 3 --out t.json",
     )
     add_gait_flags(p)
     add_sim_flags(p)
+    p.add_argument(
+        "--command-noise",
+        type=number(COMMAND_NOISE_DEG),
+        default=0.0,
+        metavar="DEG",
+        help=f"σ of white noise on every command row [deg], in {COMMAND_NOISE_DEG}: does the "
+        "verdict hang on the simulation's last bits? (open loop only; docs/sweep-format.md)",
+    )
+    p.add_argument(
+        "--noise-seed", type=integer(SEED), default=0, metavar="N", help=f"its seed, in {SEED}"
+    )
     p.add_argument("--out", required=True, metavar="FILE", help="output .json (scalars, events)")
     p.add_argument("--series", metavar="FILE", help="also write the time series (.npz)")
     p.add_argument(

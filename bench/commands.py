@@ -122,6 +122,8 @@ def trial(args) -> None:
         friction=args.friction,
         actuators=args.actuators,
         controller=args.controller,
+        command_noise=float(np.deg2rad(args.command_noise)),
+        noise_seed=args.noise_seed,
     )
     plan = plan_walk(spec, trial.gait)
     result = run_trial(spec, trial, plan=plan)

@@ -51,6 +51,8 @@ POPULATION = Range(2, 1000, integer=True, low_open=False)
 GENERATIONS = Range(1, 100_000, integer=True, low_open=False)
 SEED = Range(0, 2**32 - 1, integer=True, low_open=False)
 WORKERS = Range(1, 1024, integer=True, low_open=False)
+# bench.sim.trial's MAX_COMMAND_NOISE_DEG (a test keeps them equal)
+COMMAND_NOISE_DEG = Range(0.0, 0.5, "deg", low_open=False)
 
 
 def number(allowed: Range = FINITE):

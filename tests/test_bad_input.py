@@ -132,6 +132,21 @@ CASES = [
     (["trial", "--step-time", "1", "--friction", "grippy"], "--friction: 'grippy' is not a number"),
     (["trial", "--step-time", "1", "--slope", "61"], "--slope: 61: must lie in (-60, 60) deg"),
     (["trial", "--step-time", "1", "--actuators", "soft"], "--actuators: invalid choice: 'soft'"),
+    ([*TRIAL, "--command-noise", "nan"], "--command-noise: nan: must lie in [0, 0.5] deg"),
+    ([*TRIAL, "--command-noise=-1e-4"], "--command-noise: -1e-4: must lie in [0, 0.5] deg"),
+    ([*TRIAL, "--command-noise", "1"], "--command-noise: 1: must lie in [0, 0.5] deg"),
+    ([*TRIAL, "--command-noise", "x"], "--command-noise: 'x' is not a number"),
+    ([*TRIAL, "--noise-seed", "-1"], "--noise-seed: -1: must be an integer in [0, 4294967295]"),
+    (
+        [
+            *TRIAL,
+            "--command-noise",
+            "1e-4",
+            "--controller",
+            "bench.controllers.ankle_cop:ankle_cop_feedback",
+        ],
+        "noise is for the plan played open loop",
+    ),
     # closed-loop controllers (tests/controller_faults.py holds the misbehaving ones)
     ([*TRIAL, "--controller", "ankle_cop_feedback"], "'ankle_cop_feedback': must read MODULE:CA"),
     ([*TRIAL, "--controller", "a b:c"], "controller 'a b:c': must read MODULE:CALLABLE"),
@@ -389,6 +404,13 @@ def test_the_cli_offers_the_scenes_actuator_modes():
     from bench.sim.model import ACTUATOR_MODES
 
     assert flags.ACTUATOR_MODES == ACTUATOR_MODES
+
+
+def test_the_cli_allows_the_trials_command_noise():
+    from bench import flags
+    from bench.sim.trial import MAX_COMMAND_NOISE_DEG
+
+    assert (flags.COMMAND_NOISE_DEG.low, flags.COMMAND_NOISE_DEG.high) == (0, MAX_COMMAND_NOISE_DEG)
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")

@@ -64,6 +64,7 @@ from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial
     spec_text,
 )
 from bench.sim.model import ACTUATOR_MODES
+from bench.sim.trial import MAX_COMMAND_NOISE_DEG
 from planner.config_file import load_toml
 from planner.errors import SlopewalkError
 from planner.spec import LINK_NAMES, RobotSpec, load_spec
@@ -71,7 +72,6 @@ from planner.spec import LINK_NAMES, RobotSpec, load_spec
 SWEEPS_DIR = Path(__file__).parent / "sweeps"
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
 TOP_KEYS = ("description", "steps", "seed", "command_noise", "grid", "trial")
-MAX_NOISE_DEG = 0.5  # [deg] (``trial.MAX_COMMAND_NOISE``)
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
     "step_time": 1.0,
@@ -147,9 +147,10 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
     if isinstance(noise, bool) or not isinstance(noise, int | float) or not math.isfinite(noise):
         raise SweepError(f"{source}: command_noise = {noise!r}: must be a finite number of deg")
     noise = float(noise)
-    if not 0 <= noise <= MAX_NOISE_DEG:
+    if not 0 <= noise <= MAX_COMMAND_NOISE_DEG:
         raise SweepError(
-            f"{source}: command_noise = {noise:g} deg: must lie in [0, {MAX_NOISE_DEG:g}] deg"
+            f"{source}: command_noise = {noise:g} deg: "
+            f"must lie in [0, {MAX_COMMAND_NOISE_DEG:g}] deg"
         )
     description = data.get("description", "")
     if not isinstance(description, str):

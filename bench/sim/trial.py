@@ -51,7 +51,8 @@ from planner.zmp import signed_margin
 G = 9.81
 
 
-MAX_COMMAND_NOISE = float(np.deg2rad(0.5))  # [rad]: beyond, not a probe of the last bits
+MAX_COMMAND_NOISE_DEG = 0.5  # [deg]: beyond, not a probe of the last bits
+MAX_COMMAND_NOISE = float(np.deg2rad(MAX_COMMAND_NOISE_DEG))  # [rad]
 
 
 def check_command_noise(sigma) -> None:
@@ -210,7 +211,13 @@ class TrialResult:
         lines = [
             f"trial: {g.steps} steps of {g.step_time:g} s on {np.rad2deg(g.slope):g} deg, "
             f"mu {self.trial.friction:g}, {self.trial.actuators} actuators"
-            + (f", controller {self.trial.controller}" if self.trial.controller else ""),
+            + (f", controller {self.trial.controller}" if self.trial.controller else "")
+            + (
+                f", command noise {np.rad2deg(self.trial.command_noise):g} deg "
+                f"(seed {self.trial.noise_seed})"
+                if self.trial.command_noise
+                else ""
+            ),
             f"analytic:  {self.analytic_verdict:<12} min ZMP margin "
             f"{self.analytic_min_margin * 1e3:7.2f} mm, max friction ratio "
             f"{self.max_friction_ratio:.3f} ({'>' if self.slip_predicted else '<='} mu)",
