@@ -20,17 +20,8 @@ where the robot stands) apart:
 * the servo's sag in ``stiff``: the stance leg's joints late in single support lag their
   command by (τ + kv q̇) / kp, which a positions-only mode keeps (``stiff_ff`` feeds it
   forward);
-* what the plan's angles need to track in ``stiff``, added to the command one term at a
-  time (``LADDER``): the floor's give and sink, kv q̇ / kp (the velocity gain acting on
-  the planned speed, as a D term on the error would), A q̈ / kp (the rotor inertia the
-  stiff mode keeps from the servo), and τ / kp (the Newton–Euler torque's static lag):
-  with all four the command is ``stiff_ff``'s, bit for bit (the loop's 50 N m are never
-  reached, so nothing is clipped);
+* what ``stiff``'s and ``servo_ff``'s commands lack, term by term (``command_terms``);
 * the plan's own ZMP jumps at the phase changes (its lean's cubic changes λ̈ there);
-* ``servo_ff``'s early landing and the joints' dry friction (``friction_section``): the
-  walk with MuJoCo's friction loss, without it, and with f s / kp added to the command
-  (s ``friction_sign``, with or without a still joint's last sign held), flat and on a
-  slope;
 * the soft contact: the same walks with MuJoCo's contact time constant (``solref``,
   0.02 s by default) and time step made smaller (a stiffer floor, finer steps);
 * double support: how far the plan moves its rear sole sideways there
@@ -40,36 +31,18 @@ where the robot stands) apart:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
-import mujoco
 import numpy as np
-from mujoco import rollout
 
+from bench.report.command_terms import friction_section, ladder_section
+from bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, Case, run_case
 from bench.report.landing import landing_section
-from bench.sim.floor import SoftFloor
-from bench.sim.model import Servo, servo_settings
-from bench.sim.playback import (
-    HOLD_TIME,
-    SETTLE_TIME,
-    Recording,
-    build_model,
-    commands_and_aim,
-    floor_feedforward,
-    initial_state,
-    on_rows,
-    recording_from_rollout,
-)
 from bench.sim.support import touch_downs
-from bench.sim.trial import TrialResult, TrialSpec, compare
-from planner.joints import LEFT, stance_swing_to_left_right
-from planner.kinematics import rotation_slope_to_world
+from planner.joints import LEFT
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec
 from planner.trajectory import GaitParams
 
 WINDOW = 0.05  # [s] the transient after / before a phase change
-STEP_TIME, FRICTION, STEPS = 2.0, 1.0, 4
 # (actuator mode, the floor fed forward (None: as the mode does), label); the floor's
 # feedforward: "rigid" none, "give" the ankles' turns, "sink" the give and the sink
 CASES = (
@@ -79,25 +52,6 @@ CASES = (
     ("stiff_ff", "give", "stiff_ff, the give fed forward, not the sink"),
     ("stiff_ff", "rigid", "stiff_ff, ankles aimed as on a rigid floor"),
 )
-# What ``stiff`` adds to the plan's angles, one term at a time: (terms of ``lead``, the
-# floor fed forward, label). The last rung is stiff_ff's command.
-LADDER = (
-    ((), "rigid", "the plan's angles (stiff)"),
-    ((), "sink", "+ the floor's give and sink"),
-    (("rate",), "sink", "+ kv q̇ / kp (the velocity gain on the error)"),
-    (("rate", "rotor"), "sink", "+ A q̈ / kp (the rotor's inertia)"),
-    (("torque", "rotor", "rate"), "sink", "+ τ / kp (the static lag): stiff_ff"),
-)
-# servo_ff and the joints' dry friction: (friction loss as the spec's, the friction fed
-# forward: None, "moving" (0 where the plan holds a joint still) or "held", label)
-FRICTION_CASES = (
-    (True, None, "servo_ff"),
-    (False, None, "servo_ff, the joints' friction loss 0"),
-    (True, "moving", "+ f s / kp, s the sign of the planned speed"),
-    (True, "held", "+ f s / kp, a still joint's last sign held"),
-)
-FRICTION_SLOPES = (0.0, np.deg2rad(10.0))  # [rad]
-REST = 1e-9  # a joint is still below this share of its peak planned speed (roundoff)
 # (solref time constant [s], time step [s]); MuJoCo keeps the time constant ≥ 2 steps
 CONTACTS = ((0.02, 0.001), (0.02, 0.00025), (0.01, 0.0005), (0.005, 0.00025), (0.002, 0.00025))
 WINDOWS = (
@@ -107,123 +61,6 @@ WINDOWS = (
     "double support, first 50 ms after touch-down",
     "double support, rest",
 )
-
-
-@dataclass(frozen=True)
-class Case:
-    """One simulated walk and its comparison with the plan."""
-
-    label: str
-    result: TrialResult
-    recording: Recording
-
-
-def lead_torque(plan: Plan, servo: Servo, terms: tuple[str, ...]) -> np.ndarray:
-    """The torque whose static lag / kp ``terms`` add to the command, MJCF order [N m],
-    (n, 8) on ``plan.t``: "torque" τ (Newton–Euler), "rotor" A q̈, "rate" (d + kv) q̇,
-    summed in the order given (``playback.feedforward_stance_swing`` sums torque, rotor,
-    rate: in that order the sum is its, unclipped)."""
-    term = {
-        "torque": lambda: plan.tau,
-        "rotor": lambda: servo.armature * plan.qdd,
-        "rate": lambda: (servo.damping + servo.kv) * plan.qd,
-    }
-    total = np.zeros_like(plan.q)
-    for k, name in enumerate(terms):
-        total = term[name]() if k == 0 else total + term[name]()
-    return stance_swing_to_left_right(total, plan.stance)
-
-
-def friction_sign(qd: np.ndarray, *, held: bool) -> np.ndarray:
-    """Sign of the motion each joint's dry friction resists, (n, k): the planned speed's,
-    0 where the plan holds the joint still; with ``held`` the sign of its last motion
-    there (0 before its first).
-
-    A position loop with dry friction f stops a joint short of its command, at the edge
-    of the deadband f / kp it approached from; pushing from that side puts it on its
-    command, if the load has not moved it across the band since. Still is |q̇| ≤ ``REST``
-    × the joint's peak |q̇|: the splines' roundoff (the lean's rate is ±1e-15 rad/s at
-    each lift-off, against 0.1-2 rad/s when it moves), whose sign is noise.
-    """
-    qd = np.asarray(qd, dtype=float)
-    peak = np.abs(qd).max(axis=0, initial=0.0)
-    s = np.where(np.abs(qd) > REST * peak, np.sign(qd), 0.0)
-    if not held:
-        return s
-    rows = np.arange(s.shape[0])[:, None]
-    last = np.maximum.accumulate(np.where(s != 0, rows, 0), axis=0)  # last moving row
-    return np.take_along_axis(s, last, axis=0)
-
-
-def simulate(
-    plan: Plan,
-    actuators: str,
-    *,
-    floor_ff: str | None = None,
-    leads: tuple[str, ...] = (),
-    joint_friction: bool = True,
-    friction_ff: str | None = None,
-    timeconst: float | None = None,
-    timestep: float = 0.001,
-) -> Recording:
-    """Play ``plan`` as ``playback.play`` does, with the contacts' solref time constant
-    ``timeconst`` [s] and step ``timestep`` [s].
-
-    Args:
-        floor_ff: What of the floor's deflection the command answers, also in a mode
-            without feedforward: "rigid" nothing, "give" the ankles turned against each
-            sole's give, "sink" that and the legs shortened by the soles' sink
-            (``playback.floor_feedforward``); None: as the mode does ("sink" in a "_ff"
-            mode, "rigid" otherwise).
-        leads: ``lead_torque``'s terms, / kp, added to the command of a mode without
-            feedforward before the floor's offsets (the order in which
-            ``commands_and_aim`` adds a "_ff" mode's).
-        joint_friction: False: the joints' friction loss set to 0 in MuJoCo.
-        friction_ff: The dry friction f added to the command as f s / kp: None none,
-            "moving" or "held" (``friction_sign``'s ``held``).
-    """
-    model = build_model(plan, friction=FRICTION, actuators=actuators, timestep=timestep)
-    if timeconst is not None:
-        model.geom_solref[:, 0] = timeconst  # floor and feet: the contact's is theirs
-    servo = servo_settings(plan.spec, actuators)
-    floor = SoftFloor.of_scene(model)
-    own = "sink" if servo.feedforward else "rigid"
-    t, q_ref, aim = commands_and_aim(
-        plan, timestep, SETTLE_TIME, HOLD_TIME, servo, floor if floor_ff in (None, own) else None
-    )
-    if leads:
-        if servo.feedforward:
-            raise ValueError(f"leads {leads!r}: only for a mode without feedforward")
-        q_ref = q_ref + on_rows(t, plan, lead_torque(plan, servo, leads)) / servo.kp
-    if not joint_friction:
-        model.dof_frictionloss[:] = 0.0
-    if friction_ff is not None:
-        sign = friction_sign(plan.qd, held=friction_ff == "held")
-        friction = stance_swing_to_left_right(servo.frictionloss * sign, plan.stance)
-        q_ref = q_ref + on_rows(t, plan, friction) / servo.kp
-    if floor_ff not in (None, own, "rigid"):
-        aim = on_rows(t, plan, floor_feedforward(plan, floor, touchdown=floor_ff == "sink"))
-        q_ref = q_ref + aim
-    state, sensordata = rollout.rollout(
-        model, mujoco.MjData(model), initial_state(model, plan), q_ref[None]
-    )
-    return recording_from_rollout(
-        model,
-        state[0],
-        sensordata[0],
-        t,
-        q_ref,
-        rotation_slope_to_world(plan.params.slope),
-        servo.force_limit,
-        aim_offset=aim,
-    )
-
-
-def run_case(plan: Plan, actuators: str, label: str, **options) -> Case:
-    """``simulate``'s walk compared with the plan as ``slopewalk trial`` does."""
-    recording = simulate(plan, actuators, **options)
-    trial = TrialSpec(plan.params, friction=FRICTION, actuators=actuators)
-    return Case(label, compare(plan, trial, recording, wall_s=0.0), recording)
 
 
 def phase_windows(plan: Plan, t: np.ndarray) -> np.ndarray:
@@ -284,87 +121,6 @@ def double_support_slide(plan: Plan, case: Case) -> tuple[float, float, float]:
             ratio = np.hypot(force[:, 0], force[:, 1]) / force[:, 2]
         limited.append(np.mean(ratio[force[:, 2] > 0] >= 0.99 * FRICTION))
     return float(planned), float(simulated), float(np.mean(limited))
-
-
-def friction_section(spec: RobotSpec) -> list[str]:
-    """Markdown lines: ``servo_ff``'s landings with and without the joints' dry friction."""
-    servo = servo_settings(spec, "servo_ff")
-    lines = [
-        "",
-        "## servo_ff's landing: the joints' dry friction",
-        "",
-        f"`servo_ff` feeds the torque forward but not the joints' dry friction (the spec's "
-        f"friction loss f = {servo.frictionloss:g} N m): a joint comes to rest anywhere in "
-        f"its deadband |q_ref − q| ≤ f / kp = {servo.frictionloss / servo.kp * 1e3:.2f} mrad. "
-        f"{STEP_TIME:g} s steps, μ {FRICTION:g}, {STEPS} steps; each landing's first contact "
-        "against the planned touch-down:",
-        "",
-        "| slope [°] | command | landings [ms] | RMS [mm] | simulated |",
-        "|---|---|---|---|---|",
-    ]
-    for slope in FRICTION_SLOPES:
-        params = replace(GaitParams.nominal(spec, STEP_TIME, steps=STEPS), slope=slope)
-        plan = plan_walk(spec, params)
-        for joint_friction, friction_ff, label in FRICTION_CASES:
-            c = run_case(
-                plan,
-                "servo_ff",
-                label,
-                joint_friction=joint_friction,
-                friction_ff=friction_ff,
-            )
-            early, _ = touch_downs(plan, c.recording)
-            landings = ", ".join("–" if np.isnan(e) else f"{e * 1e3:+.0f}" for e in early)
-            lines.append(
-                f"| {np.rad2deg(slope):g} | {label} | {landings} | "
-                f"{c.result.zmp_rms * 1e3:.2f} | {c.result.simulated_verdict} |"
-            )
-    lines += [
-        "",
-        "Without the friction loss the swing sole lands on time: the early landing is the "
-        "deadband. Feeding f forward on the moving joints changes nothing: the joints that "
-        "matter are the ones the plan holds still (the ankle rolls while the lean is "
-        "held). Holding a still joint's last sign lands some steps on time and others "
-        "late: where a joint rests inside its deadband depends on how the load moved it "
-        "since it stopped (the real foot's load is not the plan's split at lift-off), "
-        "which no command computed from the plan knows. `servo_ff` is left without it.",
-    ]
-    return lines
-
-
-def ladder_section(plan: Plan) -> list[str]:
-    """Markdown lines: ``stiff`` with ``LADDER``'s terms added to its command one at a time."""
-    lines = [
-        "",
-        "## stiff: what its command lacks, one term at a time",
-        "",
-        "A position loop reaches its command only where it needs no torque: it lags by "
-        "(τ + A q̈ + (d + kv) q̇) / kp. Each row adds one more of those terms, as a position "
-        "(`cop_error.lead_torque`), to the plan's angles; the floor's give and sink are "
-        "geometry (positions from the planned loads). The last row is stiff_ff's command.",
-        "",
-        "| command | RMS [mm] | max [mm] | first contact vs planned touch-down [ms] | "
-        "normal velocity there [mm/s] | unplanned support [s] | joint tracking of the plan [°] |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for terms, floor_ff, label in LADDER:
-        c = run_case(plan, "stiff", label, floor_ff=floor_ff, leads=terms)
-        early, speed = touch_downs(plan, c.recording)
-        r, s = c.result, c.result.series
-        tracking = (s["q_simulated"] - s["q_planned"])[s["standing"]]
-        lines.append(
-            f"| {label} | {r.zmp_rms * 1e3:.2f} | {r.zmp_max * 1e3:.1f} | "
-            f"{np.nanmean(early) * 1e3:+.0f} | {np.nanmean(speed) * 1e3:+.1f} | "
-            f"{r.unplanned_support_s:.3f} | {np.rad2deg(np.sqrt(np.mean(tracking**2))):.3f} |"
-        )
-    lines += [
-        "",
-        "Positions alone (every row but the last) leave the static lag τ / kp: the robot "
-        "stands lower and turned by it, and the swing foot meets the floor before the "
-        "planned touch-down whatever else the command answers. Only the plan's torque "
-        "removes it, and a command that carries it is stiff_ff's.",
-    ]
-    return lines
 
 
 def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:

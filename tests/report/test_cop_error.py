@@ -3,19 +3,16 @@
 import numpy as np
 import pytest
 
+from bench.report.command_terms import LADDER
 from bench.report.cop_error import (
-    LADDER,
     WINDOW,
     WINDOWS,
     by_window,
     cop_error_report,
-    friction_sign,
-    lead_torque,
     phase_windows,
-    run_case,
-    simulate,
     zmp_jumps,
 )
+from bench.report.flat_walk import friction_sign, lead_torque, run_case, simulate
 from bench.sim.model import servo_settings
 from bench.sim.support import touch_downs
 from planner.joints import stance_swing_to_left_right
