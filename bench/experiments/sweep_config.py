@@ -231,8 +231,9 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) ->
     box = Box(where, values)
     # The gait's own range checks (e.g. dt <= step_time/10) of each value of
     # each axis, the other axes at their first value: each check involves one axis.
+    # A seed decides no check (any integer >= 0 is a seed): its axis is not walked.
     first = [axis[0][1] for axis in values]
-    for k, axis in enumerate(values):
+    for k, axis in enumerate(values[: AXES.index("seed")]):
         for _, value in axis[1:] if k else axis:
             combo = [*first[:k], value, *first[k + 1 :]]
             trial = TrialSet((box,), steps, noise).make(combo)

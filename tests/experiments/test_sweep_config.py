@@ -299,3 +299,19 @@ def test_command_noise_enters_the_id_the_table_and_the_trial_only_when_set():
     assert (spec_a.noise_seed, spec_b.noise_seed) == (int(a.trial_id, 16), int(b.trial_id, 16))
     assert a.inputs()["command_noise_deg"] == 1e-4 and "noise 0.0001 deg seed 1" in b.label
     assert plain.trials[0].trial_spec().command_noise == 0.0
+
+
+def test_the_checks_do_not_walk_the_seeds(monkeypatch):
+    """The per-value checks build one trial per value of each other axis, however many seeds
+    (a check per seed would cost ~1 ms each: minutes for a long replica list)."""
+    from bench.experiments.sweep_trials import SweepTrial
+
+    calls = []
+    original = SweepTrial.trial_spec
+    monkeypatch.setattr(SweepTrial, "trial_spec", lambda self: calls.append(1) or original(self))
+    grid = {"grid": {"step_time": [1.0, 0.5], "slope": [0, 5]}}
+    for seeds in (0, list(range(1000))):
+        calls.clear()
+        config = _parse(grid | {"seed": seeds})
+        assert len(calls) == 3  # both step times, then the second slope
+    assert len(config.trials) == 4000 and config.trials[1001].seed == 1
