@@ -20,6 +20,7 @@ import numpy as np
 
 from bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, run_case
 from bench.sim.model import servo_settings
+from bench.sim.playback import LOOP_TERMS
 from bench.sim.support import touch_downs
 from planner.plan import Plan, plan_walk
 from planner.spec import RobotSpec
@@ -32,7 +33,7 @@ LADDER = (
     ((), "sink", "+ the floor's give and sink"),
     (("rate",), "sink", "+ kv q̇ / kp (the velocity gain on the error)"),
     (("rate", "rotor"), "sink", "+ A q̈ / kp (the rotor's inertia)"),
-    (("torque", "rotor", "rate"), "sink", "+ τ / kp (the static lag): stiff_ff"),
+    (LOOP_TERMS, "sink", "+ τ / kp (the static lag): stiff_ff"),
 )
 # servo_ff and the joints' dry friction: (friction loss as the spec's, the friction fed
 # forward: None, "moving" (0 where the plan holds a joint still) or "held", label)

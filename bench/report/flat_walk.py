@@ -26,6 +26,7 @@ from bench.sim.playback import (
     commands_and_aim,
     floor_feedforward,
     initial_state,
+    loop_torque,
     on_rows,
     recording_from_rollout,
 )
@@ -48,19 +49,10 @@ class Case:
 
 
 def lead_torque(plan: Plan, servo: Servo, terms: tuple[str, ...]) -> np.ndarray:
-    """The torque whose static lag / kp ``terms`` add to the command, MJCF order [N m],
-    (n, 8) on ``plan.t``: "torque" τ (Newton–Euler), "rotor" A q̈, "rate" (d + kv) q̇,
-    summed in the order given (``playback.feedforward_stance_swing`` sums torque, rotor,
-    rate: in that order the sum is its, unclipped)."""
-    term = {
-        "torque": lambda: plan.tau,
-        "rotor": lambda: servo.armature * plan.qdd,
-        "rate": lambda: (servo.damping + servo.kv) * plan.qd,
-    }
-    total = np.zeros_like(plan.q)
-    for k, name in enumerate(terms):
-        total = term[name]() if k == 0 else total + term[name]()
-    return stance_swing_to_left_right(total, plan.stance)
+    """``playback.loop_torque``'s ``terms``, MJCF order [N m], (n, 8) on ``plan.t``: the
+    torque whose static lag / kp they add to the command (in ``LOOP_TERMS``' order the
+    sum is ``feedforward_torque``'s, unclipped)."""
+    return stance_swing_to_left_right(loop_torque(plan, servo, terms), plan.stance)
 
 
 def friction_sign(qd: np.ndarray, *, held: bool) -> np.ndarray:

@@ -9,7 +9,7 @@ For ``cop_error``'s report, from one simulated walk against its plan:
   planned load of the landing foot on its rows in the air;
 * ``servo_sag``: the stance leg's joint error (command − angle) over the last
   ``WINDOW`` before each touch-down, against the position loop's static lag under the
-  planned load, (τ + kv q̇) / kp: what a mode that plays positions only keeps, and
+  planned load, (τ + (d + kv) q̇) / kp: what a mode that plays positions only keeps, and
   ``stiff_ff`` feeds forward.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 
 from bench.sim.floor import foot_loads
 from bench.sim.model import Servo, servo_settings
-from bench.sim.playback import Recording, on_rows
+from bench.sim.playback import Recording, loop_torque, on_rows
 from bench.sim.support import contact_differences
 from planner.joints import LEFT, stance_swing_to_left_right
 from planner.plan import Plan
@@ -54,7 +54,7 @@ def lost_contact(plan: Plan, recording: Recording, until: float = np.inf):
 
 def servo_sag(plan: Plan, recording: Recording, servo: Servo) -> tuple[np.ndarray, np.ndarray]:
     """Stance hip pitch, knee and ankle pitch error before touch-down: measured and
-    (τ + kv q̇) / kp [rad], (3,) each, means over the last ``WINDOW`` of each single support.
+    (τ + (d + kv) q̇) / kp [rad], (3,) each, means over the last ``WINDOW`` of each single support.
     """
     t = recording.t
     params = plan.params
@@ -63,7 +63,8 @@ def servo_sag(plan: Plan, recording: Recording, servo: Servo) -> tuple[np.ndarra
         touch_down = (k + 1) * params.step_time
         before |= (t >= touch_down - WINDOW) & (t < touch_down)
     idx = np.clip(np.searchsorted(plan.t, t[before] - 1e-9), 0, plan.t.size - 1)
-    lag = stance_swing_to_left_right((plan.tau + servo.kv * plan.qd) / servo.kp, plan.stance)
+    lag = stance_swing_to_left_right(loop_torque(plan, servo, ("torque", "rate")), plan.stance)
+    lag = lag / servo.kp
     command = on_rows(t[before], plan, plan.q_left_right)
     error = command - recording.sensors.q[before]
     predicted = on_rows(t[before], plan, lag)

@@ -38,7 +38,8 @@ def _agrees(r, column: str) -> bool:
     return _walks(r[column]) == _walks(r["simulated_verdict"])
 
 
-def _trial(r) -> tuple:
+def trial_key(r) -> tuple:
+    """The inputs that make ``r``'s trial, seed and noise aside (``TRIAL_INPUTS``)."""
     return tuple(r.get(c) for c in TRIAL_INPUTS)
 
 
@@ -46,7 +47,7 @@ def flipping(rows: list[dict]) -> dict[tuple, list[dict]]:
     """Trial inputs → its rows, for each trial that walks under some seeds and not others."""
     by_trial: dict[tuple, list[dict]] = defaultdict(list)
     for r in rows:
-        by_trial[_trial(r)].append(r)
+        by_trial[trial_key(r)].append(r)
     return {
         key: group
         for key, group in by_trial.items()
@@ -85,9 +86,9 @@ def replica_section(rows: list[dict], label) -> list[str]:
         )
     low, high = min(shares), max(shares)
     flips = flipping(rows)
-    trials = len({_trial(r) for r in rows})
+    trials = len({trial_key(r) for r in rows})
     wrong = [r for r in rows if not _agrees(r, "predicted_verdict")]
-    on_flips = sum(_trial(r) in flips for r in wrong)
+    on_flips = sum(trial_key(r) in flips for r in wrong)
     lines += [
         "",
         f"The predicted verdict agrees in {low[1]}/{low[2]} ({low[0]:.1%}) to "
@@ -122,8 +123,3 @@ def undecided(tables: dict[str, list[dict]]) -> dict[tuple, str]:
                 key, f"walks under {walked}/{len(group)} seeds of command noise ({name})"
             )
     return out
-
-
-def trial_key(r) -> tuple:
-    """The inputs that make ``r``'s trial, seed and noise aside (``TRIAL_INPUTS``)."""
-    return _trial(r)

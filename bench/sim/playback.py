@@ -188,8 +188,25 @@ def feedforward_torque(plan: Plan, servo: Servo) -> np.ndarray:
 
 def feedforward_stance_swing(plan: Plan, servo: Servo) -> np.ndarray:
     """``feedforward_torque`` in the plan's Table-I order [N m], (n, 8)."""
-    total = plan.tau + servo.armature * plan.qdd + (servo.damping + servo.kv) * plan.qd
-    return np.clip(total, -servo.force_limit, servo.force_limit)
+    return np.clip(loop_torque(plan, servo), -servo.force_limit, servo.force_limit)
+
+
+LOOP_TERMS = ("torque", "rotor", "rate")  # what the loop must deliver, in summing order
+
+
+def loop_torque(plan: Plan, servo: Servo, terms: tuple[str, ...] = LOOP_TERMS) -> np.ndarray:
+    """The sum of ``terms`` of the torque a joint needs to follow the plan, unclipped,
+    Table-I order [N m], (n, 8): "torque" τ (Newton-Euler), "rotor" A q̈, "rate"
+    (d + kv) q̇, summed in the order given (``LOOP_TERMS``: ``feedforward_torque``'s)."""
+    term = {
+        "torque": lambda: plan.tau,
+        "rotor": lambda: servo.armature * plan.qdd,
+        "rate": lambda: (servo.damping + servo.kv) * plan.qd,
+    }
+    total = np.zeros_like(plan.q)
+    for k, name in enumerate(terms):
+        total = term[name]() if k == 0 else total + term[name]()
+    return total
 
 
 def play(

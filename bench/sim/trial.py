@@ -98,10 +98,9 @@ class TrialSpec:
                 f"command_noise {self.command_noise!r} rad with controller "
                 f"{self.controller!r}: noise is for the plan played open loop"
             )
-        if isinstance(self.noise_seed, bool) or not isinstance(self.noise_seed, int | np.integer):
-            raise SceneError(f"noise_seed {self.noise_seed!r}: must be an integer >= 0")
-        if self.noise_seed < 0:
-            raise SceneError(f"noise_seed {self.noise_seed!r}: must be an integer >= 0")
+        seed = self.noise_seed
+        if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+            raise SceneError(f"noise_seed {seed!r}: must be an integer >= 0")
         if not 0 < self.timestep <= 0.005:
             raise SceneError(f"timestep {self.timestep!r} s: must lie in (0, 0.005]")
         check_scene_options(
