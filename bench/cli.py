@@ -12,8 +12,8 @@ import argparse
 import sys
 import textwrap
 
-from bench import commands
-from bench.flags import (
+from slopewalk.bench import commands
+from slopewalk.bench.flags import (
     COMMAND_NOISE_DEG,
     DOCS,
     GENERATIONS,
@@ -29,8 +29,8 @@ from bench.flags import (
     integer,
     number,
 )
-from planner import ranges
-from planner.errors import SlopewalkError
+from slopewalk.planner import ranges
+from slopewalk.planner.errors import SlopewalkError
 
 
 def _command(sub, name: str, summary: str, description: str, *examples: str):
@@ -113,7 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
         "slopewalk trial --step-time 0.5 --friction 0.4 --actuators servo --out t.json \\\n"
         "      --series t.npz --record t.rrd",
         "slopewalk trial --step-time 0.6 --controller "
-        "bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
+        "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
         "slopewalk trial --step-time 1 --slope 20 --command-noise 1e-4 --noise-seed 3 --out t.json",
     )
     add_gait_flags(p)
@@ -142,7 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="MODULE:CALLABLE",
         help="close the loop: call this function (observation dict, see bench/sim/observation.py, "
         "-> actuator command) once per simulation step instead of playing the plan open loop, "
-        "e.g. bench.controllers.ankle_cop:ankle_cop_feedback (default: open loop)",
+        "e.g. slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback (default: open loop)",
     )
     p.set_defaults(run=commands.trial)
 

@@ -15,13 +15,13 @@ import sys
 
 import numpy as np
 
-from bench.files import atomic_paths, check_output, check_output_dir, in_package
-from planner.errors import SlopewalkError
+from slopewalk.bench.files import atomic_paths, check_output, check_output_dir, in_package
+from slopewalk.planner.errors import SlopewalkError
 
 
 def gait_from_args(args, spec):
     """GaitParams from parsed flags (degrees → radians here)."""
-    from planner.trajectory import GaitParams
+    from slopewalk.planner.trajectory import GaitParams
 
     overrides = {
         "slope": np.deg2rad(args.slope),
@@ -42,9 +42,9 @@ def gait_from_args(args, spec):
 
 
 def plan(args) -> None:
-    from planner.plan import plan_walk
-    from planner.spec import load_spec
-    from planner.verdict import predict
+    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.spec import load_spec
+    from slopewalk.planner.verdict import predict
 
     check_output(args.out)
     spec = load_spec(args.robot)
@@ -84,8 +84,8 @@ def plan(args) -> None:
 
 
 def mjcf(args) -> None:
-    from bench.sim.model import scene_xml
-    from planner.spec import load_spec
+    from slopewalk.bench.sim.model import scene_xml
+    from slopewalk.planner.spec import load_spec
 
     check_output(args.out)
     spec = load_spec(args.robot)
@@ -101,9 +101,9 @@ def mjcf(args) -> None:
 
 
 def trial(args) -> None:
-    from bench.sim.trial import TrialSpec, run_trial
-    from planner.plan import plan_walk
-    from planner.spec import load_spec
+    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.spec import load_spec
 
     outputs = {"--out": args.out, "--series": args.series, "--record": args.record}
     outputs = {flag: path for flag, path in outputs.items() if path is not None}
@@ -113,7 +113,7 @@ def trial(args) -> None:
     if args.record is not None:
         record_trial = _recorder("--record")
     if args.controller is not None:
-        from bench.controllers import load_controller
+        from slopewalk.bench.controllers import load_controller
 
         load_controller(args.controller)  # a bad name is refused before any work
     spec = load_spec(args.robot)
@@ -142,7 +142,7 @@ def trial(args) -> None:
 def _recorder(flag: str):
     """``record_trial``, or one line saying why recordings are unavailable."""
     try:
-        from bench.report.recording import record_trial
+        from slopewalk.bench.report.recording import record_trial
     except ImportError as err:
         raise SlopewalkError(f"{flag}: recordings are unavailable ({err})") from None
     return record_trial
@@ -159,15 +159,15 @@ def _distinct(outputs: dict) -> None:
 
 
 def optimize(args) -> None:
-    from bench.experiments.ga import GaSettings, pareto_figure
-    from bench.experiments.ga_case import (
+    from slopewalk.bench.experiments.ga import GaSettings, pareto_figure
+    from slopewalk.bench.experiments.ga_case import (
         optimize_case,
         pareto_csv,
         pareto_paths,
         pareto_title,
         summary_lines,
     )
-    from planner.spec import load_spec
+    from slopewalk.planner.spec import load_spec
 
     outputs = [args.out, *(pareto_paths(args.out) if args.pareto else ())]
     check_output(args.out)
@@ -210,7 +210,7 @@ def optimize(args) -> None:
 
 
 def fidelity(args) -> None:
-    from bench.report.fidelity import fidelity_report, read_tables
+    from slopewalk.bench.report.fidelity import fidelity_report, read_tables
 
     check_output(args.out)
     command = "slopewalk fidelity " + " ".join(args.tables) + f" --out {args.out}"
@@ -221,8 +221,8 @@ def fidelity(args) -> None:
 
 
 def cop_error(args) -> None:
-    from bench.report.cop_error import cop_error_report
-    from planner.spec import load_spec
+    from slopewalk.bench.report.cop_error import cop_error_report
+    from slopewalk.planner.spec import load_spec
 
     check_output(args.out)
     text = cop_error_report(load_spec(), command=f"slopewalk cop-error --out {args.out}")
@@ -232,8 +232,8 @@ def cop_error(args) -> None:
 
 
 def compare(args) -> None:
-    from bench.experiments import compare as comparison
-    from planner.spec import load_spec
+    from slopewalk.bench.experiments import compare as comparison
+    from slopewalk.planner.spec import load_spec
 
     outputs = {"--out": args.out}
     if args.write_baseline:
@@ -260,8 +260,8 @@ def compare(args) -> None:
 def sweep(args) -> None:
     from pathlib import Path
 
-    from bench.experiments.sweep import run_sweep
-    from bench.experiments.sweep_config import SweepError, load_sweep
+    from slopewalk.bench.experiments.sweep import run_sweep
+    from slopewalk.bench.experiments.sweep_config import SweepError, load_sweep
 
     config = load_sweep(args.config)  # the whole file is checked before anything runs
     out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
@@ -292,7 +292,7 @@ def _batch_start(args, default_out, error: type[SlopewalkError]):
 
     if args.record:
         try:
-            import bench.report.recording  # noqa: F401
+            import slopewalk.bench.report.recording  # noqa: F401
         except ImportError as err:
             raise error(f"--record: recordings are unavailable ({err})") from None
     out = Path(args.out) if args.out is not None else default_out
@@ -304,8 +304,8 @@ def _batch_start(args, default_out, error: type[SlopewalkError]):
 def _batch_executor(args):
     """The Dask cluster of ``--cluster`` (None: local workers) for a resumable run;
     SIGINT or SIGTERM of the run exits with 128 + the signal, its message on stderr."""
-    from bench.experiments.batch import Stopped
-    from bench.experiments.sweep import open_cluster
+    from slopewalk.bench.experiments.batch import Stopped
+    from slopewalk.bench.experiments.sweep import open_cluster
 
     try:
         with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
@@ -318,9 +318,9 @@ def _batch_executor(args):
 def _write_claims(results, sweep_table, envelope_table) -> None:
     """Write the claims table, confusion table and figures into ``results`` from the
     sweep's table, with the envelope's claims when ``envelope_table`` is not None."""
-    from bench.experiments.sweep_table import read_table
-    from bench.report.claims import ga_claims, write_report
-    from planner.spec import load_spec
+    from slopewalk.bench.experiments.sweep_table import read_table
+    from slopewalk.bench.report.claims import ga_claims, write_report
+    from slopewalk.planner.spec import load_spec
 
     spec = load_spec()
     envelope = envelope_table and (read_table(envelope_table), envelope_table.relative_to(results))
@@ -335,9 +335,9 @@ def _write_claims(results, sweep_table, envelope_table) -> None:
 
 
 def controllers(args) -> None:
-    from bench.controllers import SHIPPED, ControllerError, load_controller
-    from bench.experiments.controllers import compare_controllers, report
-    from bench.experiments.sweep_config import DEFAULT_SWEEP, load_sweep
+    from slopewalk.bench.controllers import SHIPPED, ControllerError, load_controller
+    from slopewalk.bench.experiments.controllers import compare_controllers, report
+    from slopewalk.bench.experiments.sweep_config import DEFAULT_SWEEP, load_sweep
 
     check_output(args.out)
     names = tuple(args.controller or SHIPPED)
@@ -363,7 +363,10 @@ def controllers(args) -> None:
     )
     text = report(table, source=source, command=command)
     if envelope is not None:
-        from bench.experiments.envelope_controllers import compare_envelope, envelope_report
+        from slopewalk.bench.experiments.envelope_controllers import (
+            compare_envelope,
+            envelope_report,
+        )
 
         jobs = envelope()
         verdicts = compare_envelope(jobs, names, workers=args.workers)
@@ -379,11 +382,11 @@ def _envelope_gaits(args):
     """The ``--envelope`` file checked now; a callable that returns its gait jobs."""
     from pathlib import Path
 
-    from bench.experiments import envelope_controllers as ec
+    from slopewalk.bench.experiments import envelope_controllers as ec
 
     path, low = Path(args.envelope), args.min_step_time or 0.0
     if path.suffix == ".toml":
-        from bench.experiments.envelope_config import load_envelope
+        from slopewalk.bench.experiments.envelope_config import load_envelope
 
         config = load_envelope(path)
         return lambda: ec.config_jobs(config, workers=args.workers, min_step_time=low)
@@ -396,8 +399,12 @@ def _envelope_gaits(args):
 def envelope(args) -> None:
     from pathlib import Path
 
-    from bench.experiments.envelope import run_convergence, run_envelope, write_convergence
-    from bench.experiments.envelope_config import EnvelopeError, load_envelope
+    from slopewalk.bench.experiments.envelope import (
+        run_convergence,
+        run_envelope,
+        write_convergence,
+    )
+    from slopewalk.bench.experiments.envelope_config import EnvelopeError, load_envelope
 
     config = load_envelope(args.config)  # the whole file is checked before anything runs
     out, resume = _batch_start(args, Path.cwd() / "results" / "envelope", EnvelopeError)
@@ -436,7 +443,7 @@ def _envelope_report(out, table) -> None:
 
 
 def benchmark(args) -> None:
-    from bench.experiments import benchmark as benchmarks
+    from slopewalk.bench.experiments import benchmark as benchmarks
 
     for name, value in benchmarks.run(args.what).items():
         print(f"{name}: {value:.6g}" if isinstance(value, float) else f"{name}: {value}")

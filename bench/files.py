@@ -21,7 +21,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from planner.errors import SlopewalkError
+from slopewalk.planner.errors import SlopewalkError
 
 
 class OutputError(SlopewalkError):

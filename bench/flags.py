@@ -11,10 +11,10 @@ from __future__ import annotations
 import argparse
 import math
 
-from planner import ranges
-from planner.ranges import Range
+from slopewalk.planner import ranges
+from slopewalk.planner.ranges import Range
 
-# bench.sim.model's (a test keeps them equal)
+# slopewalk.bench.sim.model's (a test keeps them equal)
 ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 
 
@@ -51,7 +51,7 @@ POPULATION = Range(2, 1000, integer=True, low_open=False)
 GENERATIONS = Range(1, 100_000, integer=True, low_open=False)
 SEED = Range(0, 2**32 - 1, integer=True, low_open=False)
 WORKERS = Range(1, 1024, integer=True, low_open=False)
-# bench.sim.trial's MAX_COMMAND_NOISE_DEG (a test keeps them equal)
+# slopewalk.bench.sim.trial's MAX_COMMAND_NOISE_DEG (a test keeps them equal)
 COMMAND_NOISE_DEG = Range(0.0, 0.5, "deg", low_open=False)
 
 

@@ -33,11 +33,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from planner.errors import SlopewalkError
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
-from planner.plan import Plan
-from planner.zmp import friction_ratio, signed_margin, zmp_lipm, zmp_multibody
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
+from slopewalk.planner.plan import Plan
+from slopewalk.planner.zmp import friction_ratio, signed_margin, zmp_lipm, zmp_multibody
 
 TOLERANCE = 1e-7  # [rad], largest change of q between iterations at convergence
 MAX_ITERATIONS = 60

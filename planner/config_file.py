@@ -11,7 +11,7 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
-from planner.errors import SlopewalkError
+from slopewalk.planner.errors import SlopewalkError
 
 
 def read_text(path: Path, *, where: str, kind: str, error: type[SlopewalkError]) -> str:

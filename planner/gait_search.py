@@ -40,12 +40,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import SlopewalkError
-from planner.ik import tilted_plane_height, two_link_ik
-from planner.joints import JOINT_KINDS, RIGHT, principal_angle
-from planner.plan import score
-from planner.spec import RobotSpec
-from planner.trajectory import Curve, GaitParams, Timeline, blend
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.ik import tilted_plane_height, two_link_ik
+from slopewalk.planner.joints import JOINT_KINDS, RIGHT, principal_angle
+from slopewalk.planner.plan import score
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import Curve, GaitParams, Timeline, blend
 
 VARIABLES = ("hip_height", "swing_lift", "tilt")
 EXTENDED = (*VARIABLES, "pelvis_offset", "step_length", "sway_share")

@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.errors import UnreachableError
-from planner.trajectory import Curve
+from slopewalk.planner.errors import UnreachableError
+from slopewalk.planner.trajectory import Curve
 
 
 def two_link_ik(

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.joints import LEFT
-from planner.spec import RobotSpec
+from slopewalk.planner.joints import LEFT
+from slopewalk.planner.spec import RobotSpec
 
 N_JOINTS = 8
 # Link attached to each DH frame 0..8 (frame 0 is the stance foot, fixed to the plane).

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.kinematics import Chain
+from slopewalk.planner.kinematics import Chain
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from planner.errors import SlopewalkError
+from slopewalk.planner.errors import SlopewalkError
 
 
 @dataclass(frozen=True)

@@ -56,10 +56,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.compliance import CompliantWalk, _Dynamics
-from planner.errors import SlopewalkError
-from planner.kinematics import Chain
-from planner.plan import Plan
+from slopewalk.planner.compliance import CompliantWalk, _Dynamics
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.plan import Plan
 
 STEP = 1e-6  # [rad, rad/s]: central-difference step for K_g and C (τ is smooth in q, q̇)
 

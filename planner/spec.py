@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.config_file import load_toml
-from planner.errors import SpecError
-from planner.ranges import Range
+from slopewalk.planner.config_file import load_toml
+from slopewalk.planner.errors import SpecError
+from slopewalk.planner.ranges import Range
 
 LINK_NAMES = ("pelvis", "thigh", "shank", "ankle", "foot")
 JOINT_KINDS = ("hip_pitch", "knee", "ankle_pitch", "ankle_roll")
@@ -209,7 +209,7 @@ def _replace(spec: RobotSpec, **changes) -> RobotSpec:
 
 def default_spec_path() -> Path:
     """Path of the paper's Bioloid-scale biped spec shipped with the package."""
-    return Path(str(resources.files("planner") / "robots" / "bioloid.toml"))
+    return Path(str(resources.files("slopewalk.planner") / "robots" / "bioloid.toml"))
 
 
 def load_spec(path: str | Path | None = None) -> RobotSpec:

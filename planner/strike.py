@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.kinematics import Chain
+from slopewalk.planner.kinematics import Chain
 
 G = 9.81  # [m/s²]
 _EPS = 1e-6  # [rad], finite-difference step of the Jacobian

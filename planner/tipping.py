@@ -76,8 +76,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.kinematics import Chain, gravity_in_slope
-from planner.zmp import foot_corners
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.zmp import foot_corners
 
 FALLEN = np.pi / 2  # [rad]: a rotation past this is reported as this (the robot is down)
 ROLL, PITCH = 1, 0  # axis coordinate of each rotation: y for roll, x for pitch
@@ -118,7 +118,7 @@ def edge_inertia(plan, rows, edge_point, edge_direction) -> np.ndarray:
     """Moment of inertia of the robot about a line on the plane [kg m²], at plan samples ``rows``.
 
     Args:
-        plan: The walk (``planner.plan.Plan``).
+        plan: The walk (``slopewalk.planner.plan.Plan``).
         rows: Sample indices, (k,).
         edge_point: A point of each line on the plane, (k, 2) [m].
         edge_direction: Unit direction of each line in the plane, (k, 2).

@@ -43,9 +43,9 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from planner import ranges
-from planner.errors import GaitError
-from planner.joints import LEFT, RIGHT
+from slopewalk.planner import ranges
+from slopewalk.planner.errors import GaitError
+from slopewalk.planner.joints import LEFT, RIGHT
 
 MAX_SLOPE = np.deg2rad(60.0)
 TILT_PROFILES = ("sway", "hold")

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.joints import JOINT_KINDS, JOINT_NAMES
-from planner.strike import strike_roll
-from planner.tipping import excursion_integral, foot_rotation
+from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
+from slopewalk.planner.strike import strike_roll
+from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
 # ---- Thresholds shared with the simulator (bench/sim/events.py states their basis). ----
 SLIP_DISTANCE = 0.005  # [m]

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.newton_euler import cross
+from slopewalk.planner.newton_euler import cross
 
 
 def zmp_multibody(mass, com, com_acc, momentum_rate, gravity) -> np.ndarray:

@@ -4,7 +4,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.spec import default_spec_path, load_spec
+from slopewalk.planner.spec import default_spec_path, load_spec
 
 
 @pytest.fixture(scope="session")

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from bench.sim.model import stance_rooted_xml
-from planner.joints import JOINT_NAMES, SIDE_PREFIX
+from slopewalk.bench.sim.model import stance_rooted_xml
+from slopewalk.planner.joints import JOINT_NAMES, SIDE_PREFIX
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 Each row of ``CASES`` is (argv, fragment). ``{out}`` is an empty folder that must
 stay empty, ``{in}`` a folder of prepared inputs that must stay as it was; the
-command runs in-process (``bench.cli.main``) from a working directory that must
+command runs in-process (``slopewalk.bench.cli.main``) from a working directory that must
 gain nothing (no ``MUJOCO_LOG.TXT`` either). A few end-to-end runs at the bottom
 go through a real process.
 """
@@ -16,8 +16,8 @@ import sys
 
 import pytest
 
-from bench.cli import main
-from planner.spec import default_spec_path
+from slopewalk.bench.cli import main
+from slopewalk.planner.spec import default_spec_path
 
 SPEC = default_spec_path().read_text()
 
@@ -68,8 +68,8 @@ INPUTS = {  # file name in {in} -> content
     "envelope_name.toml": ENVELOPE + 'controller = ["ankle_cop_feedback"]\n',
     "envelope_number.toml": ENVELOPE + "controller = [1]\n",
     "envelope_clash.toml": ENVELOPE  # two callables of one name: their columns would clash
-    + 'controller = ["bench.controllers:load_controller",'
-    + ' "bench.sim.closed_loop:load_controller"]\n',
+    + 'controller = ["slopewalk.bench.controllers:load_controller",'
+    + ' "slopewalk.bench.sim.closed_loop:load_controller"]\n',
 }
 
 PLAN = ["plan", "--step-time", "1"]
@@ -143,7 +143,7 @@ CASES = [
             "--command-noise",
             "1e-4",
             "--controller",
-            "bench.controllers.ankle_cop:ankle_cop_feedback",
+            "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
         ],
         "noise is for the plan played open loop",
     ),
@@ -152,8 +152,8 @@ CASES = [
     ([*TRIAL, "--controller", "a b:c"], "controller 'a b:c': must read MODULE:CALLABLE"),
     ([*TRIAL, "--controller", "no_such_module:f"], "no module named 'no_such_module'"),
     (
-        [*TRIAL, "--controller", "bench.controllers.ankle_cop:nothing"],
-        "module 'bench.controllers.ankle_cop' has no 'nothing'",
+        [*TRIAL, "--controller", "slopewalk.bench.controllers.ankle_cop:nothing"],
+        "module 'slopewalk.bench.controllers.ankle_cop' has no 'nothing'",
     ),
     ([*TRIAL, "--controller", "controller_faults:NOT_CALLABLE"], "is a float, not callable"),
     (
@@ -184,8 +184,8 @@ CASES = [
     ),
     (
         ["envelope", "{in}/envelope_clash.toml"],
-        "grid.controller: controllers bench.controllers:load_controller, "
-        "bench.sim.closed_loop:load_controller: their callables' names",
+        "grid.controller: controllers slopewalk.bench.controllers:load_controller, "
+        "slopewalk.bench.sim.closed_loop:load_controller: their callables' names",
     ),
     (
         ["controllers", "--envelope", "{in}/a_file"],
@@ -385,7 +385,7 @@ def test_no_arguments_prints_the_usage_and_fails(capsys):
 
 
 def test_every_subcommand_describes_itself_with_an_example(capsys):
-    from bench.cli import build_parser
+    from slopewalk.bench.cli import build_parser
 
     commands = build_parser()._subparsers._group_actions[0].choices
     for name, parser in commands.items():
@@ -400,15 +400,15 @@ def test_every_subcommand_describes_itself_with_an_example(capsys):
 
 
 def test_the_cli_offers_the_scenes_actuator_modes():
-    from bench import flags
-    from bench.sim.model import ACTUATOR_MODES
+    from slopewalk.bench import flags
+    from slopewalk.bench.sim.model import ACTUATOR_MODES
 
     assert flags.ACTUATOR_MODES == ACTUATOR_MODES
 
 
 def test_the_cli_allows_the_trials_command_noise():
-    from bench import flags
-    from bench.sim.trial import MAX_COMMAND_NOISE_DEG
+    from slopewalk.bench import flags
+    from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE_DEG
 
     assert (flags.COMMAND_NOISE_DEG.low, flags.COMMAND_NOISE_DEG.high) == (0, MAX_COMMAND_NOISE_DEG)
 
@@ -426,7 +426,7 @@ def test_a_full_device_is_written_through_and_never_replaced(dirs, capsys):
 
 def _cli(*args, cwd):
     return subprocess.run(
-        [sys.executable, "-m", "bench.cli", *args],
+        [sys.executable, "-m", "slopewalk.bench.cli", *args],
         capture_output=True,
         text=True,
         timeout=300,

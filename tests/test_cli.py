@@ -25,7 +25,10 @@ REQUIRED = (
 
 def _run(*args):
     return subprocess.run(
-        [sys.executable, "-m", "bench.cli", *args], capture_output=True, text=True, timeout=120
+        [sys.executable, "-m", "slopewalk.bench.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
 
 
@@ -44,9 +47,9 @@ def test_plan_writes_the_series(tmp_path):
     assert meta["params"]["slope"] == pytest.approx(np.deg2rad(10))
     assert meta["spec"]["thigh"] == 0.111
     # the values are those of the plan the flags describe (degrees at the edge only)
-    from planner.plan import plan_walk
-    from planner.spec import load_spec
-    from planner.trajectory import GaitParams
+    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.spec import load_spec
+    from slopewalk.planner.trajectory import GaitParams
 
     spec = load_spec()
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))
@@ -60,15 +63,16 @@ def test_plan_writes_the_series(tmp_path):
 
 def test_planner_never_imports_mujoco():
     code = (
-        "import sys; sys.modules['mujoco'] = None; import planner.plan, planner.spec, "
-        "planner.zmp, planner.ik, planner.trajectory, planner.newton_euler"
+        "import sys; sys.modules['mujoco'] = None; import slopewalk, slopewalk.planner.plan, "
+        "slopewalk.planner.spec, slopewalk.planner.zmp, slopewalk.planner.ik, "
+        "slopewalk.planner.trajectory, slopewalk.planner.newton_euler; slopewalk.plan_walk"
     )
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
 
 
 def test_plan_reports_a_knee_beyond_its_limit(tmp_path):
     """The paper's ZMP test alone would say 'stable'; the predicted verdict names the joint."""
-    from planner.spec import default_spec_path
+    from slopewalk.planner.spec import default_spec_path
 
     robot = tmp_path / "low_knee.toml"
     text = default_spec_path().read_text()

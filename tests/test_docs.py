@@ -6,14 +6,14 @@ from pathlib import Path
 
 import pytest
 
-from bench.experiments.sweep_config import (
+from slopewalk.bench.experiments.sweep_config import (
     DEFAULTS,
     MASS_GROUPS,
     TOP_KEYS,
     TRIAL_KEYS,
     sweep_from_dict,
 )
-from planner.spec import default_spec_path
+from slopewalk.planner.spec import default_spec_path
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOT_DOC = ROOT / "docs" / "robot-spec.md"
@@ -88,14 +88,14 @@ ENVELOPE_DOC = ROOT / "docs" / "envelope-format.md"
 
 
 def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
-    from bench.experiments.envelope_config import (
+    from slopewalk.bench.experiments.envelope_config import (
         GRID_KEYS,
         SEARCH_DEFAULTS,
         SEARCH_KEYS,
         TOP_KEYS,
         envelope_from_dict,
     )
-    from bench.sim.model import ACTUATOR_MODES
+    from slopewalk.bench.sim.model import ACTUATOR_MODES
 
     rows = _rows(ENVELOPE_DOC)
     for key in (*TOP_KEYS[:2], *GRID_KEYS, *SEARCH_KEYS):
@@ -110,8 +110,8 @@ def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
 
 
 def test_envelope_doc_names_every_family_and_its_columns():
-    from bench.experiments.envelope_cell import FAMILIES
-    from bench.experiments.envelope_table import EXTENDED_COLUMNS
+    from slopewalk.bench.experiments.envelope_cell import FAMILIES
+    from slopewalk.bench.experiments.envelope_table import EXTENDED_COLUMNS
 
     rows, text = _rows(ENVELOPE_DOC), ENVELOPE_DOC.read_text()
     for family in FAMILIES:

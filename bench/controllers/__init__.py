@@ -1,12 +1,12 @@
 """Closed-loop controllers for the bench, and the one place a ``MODULE:CALLABLE`` is loaded.
 
 A controller is any callable ``observation -> action``: the observation is the dict
-of ``bench.sim.env.TrialEnv`` (named arrays, slope frame), the action the ``nu``
+of ``slopewalk.bench.sim.env.TrialEnv`` (named arrays, slope frame), the action the ``nu``
 actuator commands. ``slopewalk trial --controller MODULE:CALLABLE`` and a sweep
 file's ``controller`` key name one; ``load_controller`` imports it. Shipped:
 
-* ``bench.controllers.ankle_cop:ankle_cop_feedback``: stance-ankle CoP feedback.
-* ``bench.controllers.capture_point:capture_point_pelvis``: LIPM capture-point
+* ``slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback``: stance-ankle CoP feedback.
+* ``slopewalk.bench.controllers.capture_point:capture_point_pelvis``: LIPM capture-point
   correction of the pelvis.
 """
 
@@ -16,12 +16,12 @@ import importlib
 import re
 from collections.abc import Callable
 
-from planner.errors import SlopewalkError
+from slopewalk.planner.errors import SlopewalkError
 
 _SPEC = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
 SHIPPED = (
-    "bench.controllers.ankle_cop:ankle_cop_feedback",
-    "bench.controllers.capture_point:capture_point_pelvis",
+    "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
+    "slopewalk.bench.controllers.capture_point:capture_point_pelvis",
 )
 
 
@@ -34,7 +34,7 @@ def check_controller_name(name: str) -> str:
     if not isinstance(name, str) or not _SPEC.match(name):
         raise ControllerError(
             f"controller {name!r}: must read MODULE:CALLABLE, "
-            "e.g. bench.controllers.ankle_cop:ankle_cop_feedback"
+            "e.g. slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
         )
     return name
 

@@ -33,10 +33,16 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
-from bench.experiments.executor import FuturesPool, Interrupted, LocalPool, Lost, interruptible
-from bench.experiments.progress import Progress
-from bench.experiments.sweep_config import SweepError
-from bench.experiments.sweep_table import SweepTable, TableFormat
+from slopewalk.bench.experiments.executor import (
+    FuturesPool,
+    Interrupted,
+    LocalPool,
+    Lost,
+    interruptible,
+)
+from slopewalk.bench.experiments.progress import Progress
+from slopewalk.bench.experiments.sweep_config import SweepError
+from slopewalk.bench.experiments.sweep_table import SweepTable, TableFormat
 
 
 class Stopped(Interrupted):

@@ -14,7 +14,7 @@ numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same firs
 calls in a fresh process once that cache is filled; ``cached_process_s``: that
 whole process, interpreter and imports included.
 
-``controller``: closed-loop steps/s (numpy controller through ``bench.sim.env``)
+``controller``: closed-loop steps/s (numpy controller through ``slopewalk.bench.sim.env``)
 vs the open-loop rollout's on the nominal trial (``controller_figures``).
 
 ``ga``: the paper's full GA setting at one slope (``evaluations``, ``wall_s`` of
@@ -42,11 +42,11 @@ import time
 
 import numpy as np
 
-from planner.kernel.run import kernel_walk
-from planner.plan import evaluate, plan_walk
-from planner.reference import evaluate_reference
-from planner.spec import load_spec
-from planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.kernel.run import kernel_walk
+from slopewalk.planner.plan import evaluate, plan_walk
+from slopewalk.planner.reference import evaluate_reference
+from slopewalk.planner.spec import load_spec
+from slopewalk.planner.trajectory import GaitParams, Timeline
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 POPULATION = 130  # the paper's GA population
@@ -79,9 +79,9 @@ _FIRST_CALLS = """
 import json, time
 start = time.perf_counter()
 import numpy as np
-from planner.plan import evaluate, plan_walk
-from planner.spec import load_spec
-from planner.trajectory import GaitParams
+from slopewalk.planner.plan import evaluate, plan_walk
+from slopewalk.planner.spec import load_spec
+from slopewalk.planner.trajectory import GaitParams
 spec = load_spec()
 imported = time.perf_counter()
 plan_walk(spec, GaitParams.nominal(spec, 1.0))
@@ -150,7 +150,7 @@ def raw_step_rate(steps: int = 5000, repeats: int = 3, *, clock=time.perf_counte
     """
     import mujoco
 
-    from bench.sim.playback import build_model
+    from slopewalk.bench.sim.playback import build_model
 
     spec = load_spec()
     plan = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
@@ -173,8 +173,8 @@ def sim_figures() -> dict:
     detection and the comparison; ``rollout_steps_per_s`` plays a batch of trials
     through ``mujoco.rollout`` on 2 threads.
     """
-    from bench.sim.playback import play_many
-    from bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.sim.playback import play_many
+    from slopewalk.bench.sim.trial import TrialSpec, run_trial
 
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
@@ -212,9 +212,9 @@ _GA_PROCESS = """
 import json, time
 start = time.perf_counter()
 import numpy as np
-from bench.experiments.ga import GaSettings, run_ga
-from planner.gait_search import GaitProblem, ga_params
-from planner.spec import load_spec
+from slopewalk.bench.experiments.ga import GaSettings, run_ga
+from slopewalk.planner.gait_search import GaitProblem, ga_params
+from slopewalk.planner.spec import load_spec
 spec = load_spec()
 problem = GaitProblem(spec, ga_params(spec, 1.0, np.deg2rad(%r)))
 result = run_ga(problem, GaSettings())
@@ -252,8 +252,8 @@ def ga_figures() -> dict:
     run bit for bit) in the same process, and ``batched_speedup`` its wall time over
     the batched run's.
     """
-    from bench.experiments.ga import GaSettings, run_ga
-    from planner.gait_search import GaitProblem, ga_params
+    from slopewalk.bench.experiments.ga import GaSettings, run_ga
+    from slopewalk.planner.gait_search import GaitProblem, ga_params
 
     spec = load_spec()
     problem = GaitProblem(spec, ga_params(spec, NOMINAL_STEP_TIME, np.deg2rad(GA_SLOPE_DEG)))
@@ -311,8 +311,8 @@ def sweep_figures() -> dict:
     import tempfile
     from concurrent.futures import ProcessPoolExecutor
 
-    from bench.experiments.sweep import run_sweep
-    from bench.experiments.sweep_config import load_sweep
+    from slopewalk.bench.experiments.sweep import run_sweep
+    from slopewalk.bench.experiments.sweep_config import load_sweep
 
     config = load_sweep()
     workers = os.cpu_count() or 1
@@ -358,7 +358,7 @@ def grid_figures() -> dict:
     import tracemalloc
     from pathlib import Path
 
-    from bench.experiments.sweep_config import sweep_from_dict
+    from slopewalk.bench.experiments.sweep_config import sweep_from_dict
 
     values = [0.4 + i / 100 for i in range(100)]
     data = {"steps": 1, "grid": {"step_time": values, "slope": values, "friction": values}}
@@ -393,14 +393,14 @@ def controller_figures() -> dict:
     jobs on a shared machine move the figures less than wall time would;
     ``ratio`` = closed loop / rollout.
     """
-    from bench.controllers import load_controller
-    from bench.sim.closed_loop import play_controller
-    from bench.sim.env import open_loop
-    from bench.sim.playback import play
-    from bench.sim.trial import TrialSpec
+    from slopewalk.bench.controllers import load_controller
+    from slopewalk.bench.sim.closed_loop import play_controller
+    from slopewalk.bench.sim.env import open_loop
+    from slopewalk.bench.sim.playback import play
+    from slopewalk.bench.sim.trial import TrialSpec
 
     spec = load_spec()
-    name = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    name = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
     trial = TrialSpec(GaitParams.nominal(spec, NOMINAL_STEP_TIME), controller=name)
     plan = plan_walk(spec, trial.gait)
     steps = play(plan).t.size
@@ -434,6 +434,6 @@ def run(what: str) -> dict:
 
 
 def _envelope_figures() -> dict:
-    from bench.experiments.envelope_benchmark import envelope_figures
+    from slopewalk.bench.experiments.envelope_benchmark import envelope_figures
 
     return envelope_figures()

@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.sim.trial import TrialSpec, run_trial
-from planner.config_file import read_text
-from planner.errors import SlopewalkError
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.config_file import read_text
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 CASES = (  # (name, step time [s], slope [deg])

@@ -1,7 +1,7 @@
 """Open loop vs closed-loop controllers over a sweep file's trials: which walk.
 
 ``compare_controllers`` plays every trial of a sweep (default: the paper's) open
-loop (one ``mujoco.rollout``) and with each controller (``bench.sim.env``), on
+loop (one ``mujoco.rollout``) and with each controller (``slopewalk.bench.sim.env``), on
 local spawned worker processes (``map_local``), and ``report`` writes the markdown table of
 ``results/controllers.md``: per controller, how many trials walk (simulated
 verdict ``stable``), which ones it gains and loses against open loop, and the
@@ -14,8 +14,8 @@ import dataclasses
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 
-from bench.controllers import SHIPPED
-from bench.sim.trial import run_trial
+from slopewalk.bench.controllers import SHIPPED
+from slopewalk.bench.sim.trial import run_trial
 
 OPEN_LOOP = "open loop"
 

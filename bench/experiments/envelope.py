@@ -26,10 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.batch import Batch, duration, run_batch
-from bench.experiments.envelope_cell import error_row, is_failure, run_cell, run_cell_search
-from bench.experiments.envelope_config import EnvelopeConfig
-from bench.experiments.envelope_table import envelope_format
+from slopewalk.bench.experiments.batch import Batch, duration, run_batch
+from slopewalk.bench.experiments.envelope_cell import (
+    error_row,
+    is_failure,
+    run_cell,
+    run_cell_search,
+)
+from slopewalk.bench.experiments.envelope_config import EnvelopeConfig
+from slopewalk.bench.experiments.envelope_table import envelope_format
 
 RECORDINGS_DIR = "recordings"
 FIGURE_NAME = "envelope.png"
@@ -159,7 +164,7 @@ def run_envelope(
         after_row=_eta(start, len(cells)),
     )
     if figure and not result.lost:
-        from bench.report.envelope_figure import write_figure
+        from slopewalk.bench.report.envelope_figure import write_figure
 
         write_figure(result.table, out_dir / FIGURE_NAME)
         write_boundaries(result.table, out_dir / BOUNDARIES_NAME, config.source)
@@ -202,9 +207,9 @@ def _eta(start: float, total: int):
 
 def write_boundaries(table, path, source: str) -> Path:
     """``boundaries.md`` (``envelope_claims.boundaries_markdown``) from a finished table."""
-    from bench.experiments.sweep_table import read_table
-    from bench.files import atomic_path
-    from bench.report.envelope_claims import boundaries_markdown
+    from slopewalk.bench.experiments.sweep_table import read_table
+    from slopewalk.bench.files import atomic_path
+    from slopewalk.bench.report.envelope_claims import boundaries_markdown
 
     path = Path(path)
     with atomic_path(path) as tmp:
@@ -302,7 +307,7 @@ def run_convergence(
 def _by_id(path, fmt) -> dict[str, dict]:
     """The rows of a table (``read_table``: numbers as floats) by their id as written
     (an id of decimal digits only would read as a number)."""
-    from bench.experiments.sweep_table import read_table
+    from slopewalk.bench.experiments.sweep_table import read_table
 
     ids = fmt.read_rows(path)
     return dict(zip(ids, read_table(path), strict=True))
@@ -332,7 +337,7 @@ def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergenc
 
 def write_convergence(check: Convergence, config: EnvelopeConfig, out_dir: str | Path) -> Path:
     """``convergence.md`` in ``out_dir``: the figures and one line per cell compared."""
-    from bench.files import atomic_path
+    from slopewalk.bench.files import atomic_path
 
     s = config.search
     lines = [

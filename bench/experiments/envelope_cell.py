@@ -32,7 +32,7 @@ comparison), into the columns ``<gait>_<mode>_<tag>_verdict`` and ``…_zmp_rms_
 
 ``run_cell`` runs in a worker and never raises: a failure is the cell's
 ``error`` (verdicts ``error``). The table's columns are ``envelope_table.ENVELOPE``'s; one
-verdict column pair per actuator mode of ``bench.sim.model.ACTUATOR_MODES``, so
+verdict column pair per actuator mode of ``slopewalk.bench.sim.model.ACTUATOR_MODES``, so
 a mode the bench gains joins the table by itself; with controllers,
 ``envelope_format(controllers)`` appends theirs after every other column, so
 each open-loop column keeps its place.
@@ -48,10 +48,10 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
-from bench.experiments.executor import one_line
-from bench.experiments.sweep_trials import TIMESTEP, spec_text
-from planner.spec import RobotSpec
+from slopewalk.bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
+from slopewalk.bench.experiments.executor import one_line
+from slopewalk.bench.experiments.sweep_trials import TIMESTEP, spec_text
+from slopewalk.planner.spec import RobotSpec
 
 # (Hz, Szmax, θ1max) and (…, δ, L, w): planner/gait_search.py's FAMILIES
 FAMILIES = ("paper", "extended")
@@ -147,7 +147,7 @@ class EnvelopeCell:
 
     def problem(self):
         """The GA's problem of this cell's family (``planner.gait_search.GaitProblem``)."""
-        from planner.gait_search import GaitProblem, ga_params
+        from slopewalk.planner.gait_search import GaitProblem, ga_params
 
         params = ga_params(self.spec, self.step_time, self.slope, steps=self.steps)
         return GaitProblem(self.spec, params, family=self.family)
@@ -155,7 +155,7 @@ class EnvelopeCell:
     def gait(self, x):
         """The walk of GA variables ``x`` at 1 ms (``GaitParams``): (Hz, Szmax, tilt), and
         (δ, L, w) for the extended family."""
-        from planner.trajectory import GaitParams
+        from slopewalk.planner.trajectory import GaitParams
 
         extra = {}
         if len(x) == 6:
@@ -188,7 +188,7 @@ class _Shifted:
         return self.inner.bounds
 
     def measure(self, X):
-        from planner.gait_search import Measurement
+        from slopewalk.planner.gait_search import Measurement
 
         m = self.inner.measure(X)
         return Measurement(m.work, m.margin - self.required, m.joint_gap)
@@ -228,7 +228,7 @@ def run_cell_search(cell: EnvelopeCell, record_dir: str | None = None) -> dict:
 
 
 def _run(cell: EnvelopeCell, record_dir: str | None, simulate: bool) -> dict:
-    from bench.experiments.ga import GaSettings, run_ga
+    from slopewalk.bench.experiments.ga import GaSettings, run_ga
 
     s = cell.search
     problem = cell.problem()
@@ -304,8 +304,8 @@ def _choose(cell, gait, pool, order, fallback, required, record_dir, simulate) -
     no candidate (nothing admissible, or nothing of the required margin) the
     search's own best is reported, ``found`` False, and not played.
     """
-    from planner.errors import UnreachableError
-    from planner.plan import plan_walk
+    from slopewalk.planner.errors import UnreachableError
+    from slopewalk.planner.plan import plan_walk
 
     failures = []
     for i in _spread(order, pool.X):
@@ -368,7 +368,7 @@ def _gait_columns(cell, gait: str, x, work: float, margin: float, found: bool) -
 def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
     """Play a 1 ms ``plan`` in every mode of the cell, open loop and with each of its
     controllers: their verdict and ZMP RMS columns."""
-    from bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.sim.trial import TrialSpec, run_trial
 
     out = {}
     for i, mode in enumerate(cell.modes):
@@ -385,7 +385,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
             verdict, rms = sim_columns(gait, mode, tag)
             out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}
             if record_dir is not None and i == 0:
-                from bench.experiments.sweep import _record
+                from slopewalk.bench.experiments.sweep import _record
 
                 name = f"{cell.cell_id}_{tag}" if tag else cell.cell_id
                 try:

@@ -11,7 +11,8 @@ Format (degrees and millimetres at this edge, like the CLI)::
     friction = [1.0]                 # Coulomb mu, in (0, 10] ([1.0])
     robot = ["default"]              # spec files, relative to this file (the paper's biped)
     actuators = ["stiff", "servo"]   # modes each found gait is played in (every mode the bench has)
-    controller = ["bench.controllers.ankle_cop:ankle_cop_feedback"]  # also walked closed loop ([])
+    # also walked closed loop ([])
+    controller = ["slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"]
 
     [search]             # the GA of every cell (the paper's operators, seeded)
     population = 40      # in [2, 1000] (40)
@@ -39,16 +40,16 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
-from bench.experiments.envelope_table import envelope_format
-from bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
-from bench.files import in_package
-from bench.flags import GENERATIONS, POPULATION, SEED
-from bench.sim.model import ACTUATOR_MODES
-from planner import ranges
-from planner.config_file import load_toml
-from planner.errors import SlopewalkError
-from planner.trajectory import GaitParams
+from slopewalk.bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
+from slopewalk.bench.experiments.envelope_table import envelope_format
+from slopewalk.bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
+from slopewalk.bench.files import in_package
+from slopewalk.bench.flags import GENERATIONS, POPULATION, SEED
+from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.planner import ranges
+from slopewalk.planner.config_file import load_toml
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.trajectory import GaitParams
 
 ENVELOPES_DIR = Path(__file__).parent / "envelopes"
 DEFAULT_ENVELOPE = ENVELOPES_DIR / "paper.toml"

@@ -8,7 +8,7 @@ either from a finished ``envelope.csv`` (``table_jobs``: its parameters,
 re-planned at 1 ms, no GA run again) or from an envelope file
 (``config_jobs``: every cell's GA run again, no MuJoCo). ``compare_envelope``
 walks each gait open loop (one ``mujoco.rollout``) and with each controller
-(``bench.sim.env``) on local worker processes; ``envelope_report`` writes the
+(``slopewalk.bench.sim.env``) on local worker processes; ``envelope_report`` writes the
 markdown section of ``results/controllers.md``: per gait and mode, how many
 cells walk (simulated verdict ``stable``) open loop and with each controller,
 and which cells each controller gains and loses.
@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.controllers import map_local
-from bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
-from bench.sim.model import ACTUATOR_MODES
-from planner.errors import SlopewalkError
-from planner.spec import RobotSpec
+from slopewalk.bench.experiments.controllers import map_local
+from slopewalk.bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
+from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.spec import RobotSpec
 
 GAIT_NAMES = {"maxmargin": "max-margin", "minwork": "min-work"}
 _INPUTS = ("cell_id", "step_time", "slope_deg", "friction", "robot", "steps", "error")
@@ -123,8 +123,8 @@ def table_jobs(path: str | Path, *, min_step_time: float = 0.0) -> list[GaitJob]
     """
     import csv
 
-    from bench.experiments.envelope_cell import is_failure
-    from planner.spec import load_spec
+    from slopewalk.bench.experiments.envelope_cell import is_failure
+    from slopewalk.planner.spec import load_spec
 
     path = Path(path)
     try:
@@ -163,7 +163,7 @@ def table_jobs(path: str | Path, *, min_step_time: float = 0.0) -> list[GaitJob]
 def config_jobs(config, *, workers: int = 1, min_step_time: float = 0.0) -> list[GaitJob]:
     """The gaits of an envelope file's cells at step times ≥ ``min_step_time`` [s], each
     cell's GA run again (``run_cell_search``, no MuJoCo), walked in the file's modes."""
-    from bench.experiments.envelope_cell import is_failure, run_cell_search
+    from slopewalk.bench.experiments.envelope_cell import is_failure, run_cell_search
 
     cells = [c for c in config.cells if c.step_time >= min_step_time]
     rows = map_local(run_cell_search, cells, workers)
@@ -179,10 +179,10 @@ def play_gait(job_and_controllers) -> dict:
     """{(mode, controller or None): simulated verdict} of one gait, re-planned at 1 ms."""
     import numba
 
-    from bench.experiments.sweep_trials import TIMESTEP
-    from bench.sim.trial import TrialSpec, run_trial
-    from planner.plan import plan_walk
-    from planner.trajectory import GaitParams
+    from slopewalk.bench.experiments.sweep_trials import TIMESTEP
+    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.trajectory import GaitParams
 
     job, controllers = job_and_controllers
     numba.set_num_threads(1)  # one per worker process

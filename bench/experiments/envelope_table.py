@@ -4,7 +4,7 @@
 inputs, then per gait (``GAITS``: max-margin, min-work) whether the GA found it,
 its margins (GA and 1 ms), work and parameters (``GAIT_COLUMNS``, the extended
 family's ``EXTENDED_COLUMNS`` after its tilt), then one verdict and ZMP RMS pair
-per gait and actuator mode of ``bench.sim.model.ACTUATOR_MODES`` (``sim_columns``),
+per gait and actuator mode of ``slopewalk.bench.sim.model.ACTUATOR_MODES`` (``sim_columns``),
 so a mode the bench gains joins the table by itself. With controllers,
 ``envelope_format(controllers)`` appends their pairs after every other column, so
 each open-loop column keeps its place. ``envelope_cell`` fills a row.
@@ -12,8 +12,8 @@ each open-loop column keeps its place. ``envelope_cell`` fills a row.
 
 from __future__ import annotations
 
-from bench.experiments.sweep_table import SIMULATED_VERDICTS, TableFormat
-from bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.experiments.sweep_table import SIMULATED_VERDICTS, TableFormat
+from slopewalk.bench.sim.model import ACTUATOR_MODES
 
 GAITS = ("maxmargin", "minwork")
 GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",

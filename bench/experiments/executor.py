@@ -50,7 +50,7 @@ from concurrent.futures import wait as wait_futures
 from dataclasses import dataclass
 from multiprocessing.connection import wait as wait_ready
 
-from planner.errors import SlopewalkError
+from slopewalk.planner.errors import SlopewalkError
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fallback)

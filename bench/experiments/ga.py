@@ -49,9 +49,9 @@ from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
 from tqdm import tqdm
 
-from bench.experiments.ga_operators import ArrayDuplicates, ArrayGA
-from planner.errors import SlopewalkError
-from planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
+from slopewalk.bench.experiments.ga_operators import ArrayDuplicates, ArrayGA
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
 
 
 @dataclass(frozen=True)
@@ -63,7 +63,7 @@ class GaSettings:
         generations: Generations including the initial one, ≥ 1.
         seed: Seed of the run's random generator, ≥ 0.
         constraint: "penalty" (paper, eq. 6), "margin" or "stability" (the most stable gait)
-            (``planner.gait_search.objectives``).
+            (``slopewalk.planner.gait_search.objectives``).
         crossover: Probability that a mating pair is crossed (SBX), in [0, 1].
         mutation: Probability that one variable of a child is mutated (PM), in [0, 1].
     """
@@ -256,7 +256,7 @@ def run_ga(
     """Minimise the problem's objective with pymoo's GA under ``settings`` (module doc).
 
     Args:
-        problem: A ``planner.gait_search.GaitProblem`` or anything with its interface.
+        problem: A ``slopewalk.planner.gait_search.GaitProblem`` or anything with its interface.
         progress: Show a tqdm bar (one tick per generation) on stderr.
         batched: Size the mating rounds by the last round's share of unique children
             (``ga_operators.ArrayGA``); False mates as pymoo does, bit for bit.

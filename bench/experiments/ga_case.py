@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.ga import GaSettings, ParetoFront, RunResult, run_ga, run_nsga2
-from planner.errors import SlopewalkError, UnreachableError
-from planner.gait_search import (
+from slopewalk.bench.experiments.ga import GaSettings, ParetoFront, RunResult, run_ga, run_nsga2
+from slopewalk.planner.errors import SlopewalkError, UnreachableError
+from slopewalk.planner.gait_search import (
     MIN_CLEARANCE,
     PENALTY,
     SAMPLES_PER_STEP,
@@ -24,9 +24,9 @@ from planner.gait_search import (
     ga_params,
     joint_limit_excess,
 )
-from planner.plan import plan_walk
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
 
 CHECK_DT = 1e-3  # [s] resolution at which the best gait is re-planned and checked
 

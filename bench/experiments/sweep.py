@@ -45,10 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiments.batch import Batch, Stopped, duration, run_batch
-from bench.experiments.executor import one_line
-from bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
+from slopewalk.bench.experiments.batch import Batch, Stopped, duration, run_batch
+from slopewalk.bench.experiments.executor import one_line
+from slopewalk.bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
+from slopewalk.bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -66,8 +66,8 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
         trial: The trial.
         record_dir: Where to write ``<trial_id>.rrd``, or None for no recording.
     """
-    from bench.sim.trial import run_trial
-    from planner.plan import plan_walk
+    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.planner.plan import plan_walk
 
     try:
         plan = plan_walk(trial.spec, trial.gait())
@@ -142,7 +142,7 @@ def outcome_columns(result, plan) -> dict:
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
     """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place."""
-    from bench.report.recording import record_trial
+    from slopewalk.bench.report.recording import record_trial
 
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"

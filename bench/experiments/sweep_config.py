@@ -14,7 +14,8 @@ Format (degrees at this edge, like the CLI)::
     actuators = ["stiff"]                  # "stiff", "servo", "stiff_ff", "servo_ff" ("stiff")
     robot = ["short_legs.toml"]            # spec files, relative to this file (the paper's biped)
     mass_scale = [{}, {all = 10}, {legs = 2}]   # per link-group factors, > 0 ({} = none)
-    controller = ["none", "bench.controllers.ankle_cop:ankle_cop_feedback"]  # ("none": open loop)
+    # ("none": open loop)
+    controller = ["none", "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"]
 
     [[trial]]          # single trials beside (or instead of) the grid: same keys, scalars
     step_time = 0.4
@@ -54,7 +55,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
-from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
+from slopewalk.bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
     AXES,
     TIMESTEP,
     Body,
@@ -63,11 +64,11 @@ from bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial
     TrialSet,
     spec_text,
 )
-from bench.sim.model import ACTUATOR_MODES
-from bench.sim.trial import MAX_COMMAND_NOISE_DEG
-from planner.config_file import load_toml
-from planner.errors import SlopewalkError
-from planner.spec import LINK_NAMES, RobotSpec, load_spec
+from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE_DEG
+from slopewalk.planner.config_file import load_toml
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.spec import LINK_NAMES, RobotSpec, load_spec
 
 SWEEPS_DIR = Path(__file__).parent / "sweeps"
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
@@ -291,7 +292,7 @@ def _body(robot, scale, robots, base_dir, where) -> Body:
 
 def _controller(value, where: str) -> str | None:
     """None for "none" (open loop), else a ``MODULE:CALLABLE`` that imports and is callable."""
-    from bench.controllers import load_controller
+    from slopewalk.bench.controllers import load_controller
 
     if value == OPEN_LOOP:
         return None

@@ -49,8 +49,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from bench.experiments.sweep_config import SweepError
-from bench.files import atomic_path
+from slopewalk.bench.experiments.sweep_config import SweepError
+from slopewalk.bench.files import atomic_path
 
 COLUMNS = (
     # inputs

@@ -19,10 +19,10 @@ from functools import cached_property
 
 import numpy as np
 
-from bench.sim.playback import HOLD_TIME, SETTLE_TIME
-from bench.sim.trial import TrialSpec
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
+from slopewalk.bench.sim.trial import TrialSpec
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
 
 TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk

@@ -21,14 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.files import atomic_path
-from bench.report import figures
-from bench.sim.model import servo_settings
-from bench.sim.trial import TrialSpec, run_trial
-from planner.plan import plan_walk
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
-from planner.zmp import signed_margin
+from slopewalk.bench.files import atomic_path
+from slopewalk.bench.report import figures
+from slopewalk.bench.sim.model import servo_settings
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import signed_margin
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 SIM_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
@@ -416,8 +416,8 @@ def confusion(rows) -> str:
 
 def _predicted_confusion(rows) -> list[str]:
     """The predicted verdict (most severe predicted event) × simulated, and its disagreements."""
-    from bench.report.fidelity import confusion_table, disagreement_cause
-    from planner.verdict import VERDICT_KINDS
+    from slopewalk.bench.report.fidelity import confusion_table, disagreement_cause
+    from slopewalk.planner.verdict import VERDICT_KINDS
 
     lines = ["", "# Predicted vs simulated verdicts", ""]
     lines += confusion_table(rows, "predicted_verdict", ("stable", *VERDICT_KINDS))
@@ -466,7 +466,7 @@ def write_report(
     ga_rows = list(ga_claims or [])
     found = []
     if envelope is not None:
-        from bench.report.envelope_claims import envelope_cell_note, envelope_claims
+        from slopewalk.bench.report.envelope_claims import envelope_cell_note, envelope_claims
 
         env_rows, cite = envelope[0], str(envelope[1])
         found = envelope_claims(env_rows, cite)

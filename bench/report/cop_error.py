@@ -11,7 +11,7 @@ where the robot stands) apart:
   the samples, so the shares add up to the total);
 * the cases: ``stiff`` (positions only), ``stiff`` with the floor's give and sink fed
   forward (``playback.floor_feedforward``, no torque), ``stiff_ff`` (torque, give and sink:
-  the swing sole lands at the planned touch-down, ``bench.sim.touchdown``), ``stiff_ff``
+  the swing sole lands at the planned touch-down, ``slopewalk.bench.sim.touchdown``), ``stiff_ff``
   with the give fed forward but not the sink, and ``stiff_ff`` with its ankles aimed as
   on a rigid floor (torque only); per case each swing foot's first contact against the
   planned touch-down and its normal velocity there (``support.touch_downs``), and the
@@ -33,14 +33,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from bench.report.command_terms import friction_section, ladder_section
-from bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, Case, run_case
-from bench.report.landing import landing_section
-from bench.sim.support import touch_downs
-from planner.joints import LEFT
-from planner.plan import Plan, plan_walk
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
+from slopewalk.bench.report.command_terms import friction_section, ladder_section
+from slopewalk.bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, Case, run_case
+from slopewalk.bench.report.landing import landing_section
+from slopewalk.bench.sim.support import touch_downs
+from slopewalk.planner.joints import LEFT
+from slopewalk.planner.plan import Plan, plan_walk
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
 
 WINDOW = 0.05  # [s] the transient after / before a phase change
 # (actuator mode, the floor fed forward (None: as the mode does), label); the floor's

@@ -10,8 +10,8 @@ Numbers at fixed precision, as in ``claims.py``.
 
 from __future__ import annotations
 
-from bench.experiments.envelope_cell import is_failure
-from bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.experiments.envelope_cell import is_failure
+from slopewalk.bench.sim.model import ACTUATOR_MODES
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 

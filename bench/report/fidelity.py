@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.report.replicas import replica_section, trial_key, undecided
-from planner.errors import SlopewalkError
-from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
+from slopewalk.bench.report.replicas import replica_section, trial_key, undecided
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
 
 VERDICTS = ("paper", "compliant", "predicted")
 _COLUMN = {
@@ -287,7 +287,7 @@ def read_tables(paths: list[str | Path]) -> dict[str, list[dict]]:
     Raises:
         FidelityError: a missing or unreadable file, or one that is not a sweep table.
     """
-    from bench.experiments.sweep_table import read_table
+    from slopewalk.bench.experiments.sweep_table import read_table
 
     tables = {}
     for path in paths:

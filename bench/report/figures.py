@@ -14,8 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from bench.files import atomic_path  # noqa: E402
-from planner.joints import JOINT_NAMES, MJCF_JOINTS  # noqa: E402
+from slopewalk.bench.files import atomic_path  # noqa: E402
+from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS  # noqa: E402
 
 # One colour and one marker per outcome, so no two are told apart by hue alone: the
 # Okabe-Ito palette (distinct under the common colour-vision deficiencies) and shapes

@@ -16,9 +16,9 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from bench.sim.floor import SoftFloor
-from bench.sim.model import Servo, servo_settings
-from bench.sim.playback import (
+from slopewalk.bench.sim.floor import SoftFloor
+from slopewalk.bench.sim.model import Servo, servo_settings
+from slopewalk.bench.sim.playback import (
     HOLD_TIME,
     SETTLE_TIME,
     Recording,
@@ -30,10 +30,10 @@ from bench.sim.playback import (
     on_rows,
     recording_from_rollout,
 )
-from bench.sim.trial import TrialResult, TrialSpec, compare
-from planner.joints import stance_swing_to_left_right
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import Plan
+from slopewalk.bench.sim.trial import TrialResult, TrialSpec, compare
+from slopewalk.planner.joints import stance_swing_to_left_right
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import Plan
 
 STEP_TIME, FRICTION, STEPS = 2.0, 1.0, 4
 REST = 1e-9  # a joint is still below this share of its peak planned speed (roundoff)

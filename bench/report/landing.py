@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from bench.sim.floor import foot_loads
-from bench.sim.model import Servo, servo_settings
-from bench.sim.playback import Recording, loop_torque, on_rows
-from bench.sim.support import contact_differences
-from planner.joints import LEFT, stance_swing_to_left_right
-from planner.plan import Plan
+from slopewalk.bench.sim.floor import foot_loads
+from slopewalk.bench.sim.model import Servo, servo_settings
+from slopewalk.bench.sim.playback import Recording, loop_torque, on_rows
+from slopewalk.bench.sim.support import contact_differences
+from slopewalk.planner.joints import LEFT, stance_swing_to_left_right
+from slopewalk.planner.plan import Plan
 
 WINDOW = 0.05  # [s] before each touch-down, as cop_error's last window of a single support
 

@@ -33,13 +33,13 @@ import mujoco
 import numpy as np
 import rerun as rr
 
-from bench.files import atomic_path
-from bench.sim.playback import build_model
-from bench.sim.trial import TrialResult
-from planner.errors import SlopewalkError
-from planner.joints import MJCF_JOINTS
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import Plan
+from slopewalk.bench.files import atomic_path
+from slopewalk.bench.sim.playback import build_model
+from slopewalk.bench.sim.trial import TrialResult
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.joints import MJCF_JOINTS
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import Plan
 
 FRAME_RATE = 100.0  # [Hz] of the 3D entities
 FORCE_SCALE = 0.01  # [m/N] arrow length per newton of ground force

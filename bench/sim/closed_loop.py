@@ -12,11 +12,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from bench.controllers import ControllerError, load_controller
-from bench.sim.env import ActionError, TrialEnv
-from bench.sim.playback import Recording
-from planner.plan import Plan
-from planner.spec import RobotSpec
+from slopewalk.bench.controllers import ControllerError, load_controller
+from slopewalk.bench.sim.env import ActionError, TrialEnv
+from slopewalk.bench.sim.playback import Recording
+from slopewalk.planner.plan import Plan
+from slopewalk.planner.spec import RobotSpec
 
 
 def play_controller(

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from planner.joints import MJCF_JOINTS, SIDE_PREFIX
+from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX
 
 FOOT_GEOMS = tuple(f"{p}foot" for p in SIDE_PREFIX)
 NON_FOOT_BODIES = ("pelvis",) + tuple(

@@ -41,12 +41,12 @@ import mujoco
 import numpy as np
 from dm_env import specs
 
-from bench.sim.contact import NON_FOOT_BODIES
-from bench.sim.events import FALL_HEIGHT_FRACTION
-from bench.sim.floor import SoftFloor
-from bench.sim.model import servo_settings
-from bench.sim.observation import Observer, sensor_indices
-from bench.sim.playback import (
+from slopewalk.bench.sim.contact import NON_FOOT_BODIES
+from slopewalk.bench.sim.events import FALL_HEIGHT_FRACTION
+from slopewalk.bench.sim.floor import SoftFloor
+from slopewalk.bench.sim.model import servo_settings
+from slopewalk.bench.sim.observation import Observer, sensor_indices
+from slopewalk.bench.sim.playback import (
     _STATE,
     HOLD_TIME,
     SETTLE_TIME,
@@ -56,10 +56,10 @@ from bench.sim.playback import (
     initial_state,
     recording_from_rollout,
 )
-from planner.errors import SlopewalkError
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import Plan, plan_walk
-from planner.spec import RobotSpec, load_spec
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import Plan, plan_walk
+from slopewalk.planner.spec import RobotSpec, load_spec
 
 _CTRL = mujoco.mjtState.mjSTATE_CTRL
 
@@ -94,7 +94,9 @@ class TrialEnv(dm_env.Environment):
         settle: float = SETTLE_TIME,
         hold: float = HOLD_TIME,
     ):
-        from bench.sim.trial import TrialSpec  # trial.py runs controllers through this module
+        from slopewalk.bench.sim.trial import (
+            TrialSpec,  # trial.py runs controllers through this module
+        )
 
         spec = spec if spec is not None else load_spec()
         trial = trial if trial is not None else TrialSpec(_nominal(spec))
@@ -230,6 +232,6 @@ class TrialEnv(dm_env.Environment):
 
 
 def _nominal(spec: RobotSpec):
-    from planner.trajectory import GaitParams
+    from slopewalk.planner.trajectory import GaitParams
 
     return GaitParams.nominal(spec, 1.0)

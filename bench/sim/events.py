@@ -30,12 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bench.sim.playback import Recording
-from planner.joints import MJCF_JOINTS
+from slopewalk.bench.sim.playback import Recording
+from slopewalk.planner.joints import MJCF_JOINTS
 
 # SLIP_DISTANCE, LOADED_FRACTION, TIP_ANGLE: one definition with the analytic prediction's
 # (planner/verdict.py), their basis stated above.
-from planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
+from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
 
 FALL_HEIGHT_FRACTION = 0.6  # of the planned hip height
 SATURATION = 0.99  # of the actuator's torque limit

@@ -43,7 +43,7 @@ touch-down), takes half the weight at once and throws the CoP ~40 mm off the pla
 ZMP. Turning each ankle by its foot's give (roll by θ_x, pitch by θ_y / cos(roll), the
 pitch axis sitting on the rolled ankle) keeps the legs, the body and the swing foot
 where the plan has them. The sink left (the robot stands lower by the stance sole's
-sink under its ankle) is ``bench.sim.touchdown``'s.
+sink under its ankle) is ``slopewalk.bench.sim.touchdown``'s.
 
 Each foot's load and CoP come from the plan: in single support the stance foot
 carries the whole ground force at the ZMP; in double support each foot carries
@@ -63,8 +63,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from bench.sim.contact import FOOT_GEOMS
-from planner.joints import LEFT
+from slopewalk.bench.sim.contact import FOOT_GEOMS
+from slopewalk.planner.joints import LEFT
 
 G = 9.81  # [m/s²]
 

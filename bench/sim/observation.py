@@ -38,11 +38,11 @@ import mujoco
 import numpy as np
 from dm_env import specs
 
-from bench.sim import playback
-from bench.sim.contact import FOOT_GEOMS, MAX_CONTACTS
-from planner.joints import MJCF_JOINTS, SIDE_PREFIX, stance_swing_to_left_right
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import Plan
+from slopewalk.bench.sim import playback
+from slopewalk.bench.sim.contact import FOOT_GEOMS, MAX_CONTACTS
+from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX, stance_swing_to_left_right
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import Plan
 
 
 def sensor_indices(model: mujoco.MjModel, *names: str) -> np.ndarray:

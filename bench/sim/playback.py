@@ -32,13 +32,13 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from bench.sim.contact import TrialSensors, add_trial_sensors, decode
-from bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
-from bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
-from bench.sim.touchdown import leg_offsets, leg_shortening
-from planner.joints import stance_swing_to_left_right
-from planner.kinematics import Chain, rotation_slope_to_world
-from planner.plan import Plan
+from slopewalk.bench.sim.contact import TrialSensors, add_trial_sensors, decode
+from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
+from slopewalk.bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
+from slopewalk.bench.sim.touchdown import leg_offsets, leg_shortening
+from slopewalk.planner.joints import stance_swing_to_left_right
+from slopewalk.planner.kinematics import Chain, rotation_slope_to_world
+from slopewalk.planner.plan import Plan
 
 SETTLE_TIME = 0.5  # [s] hold at the first pose before the walk
 HOLD_TIME = 0.5  # [s] hold at the last pose after the walk

@@ -7,7 +7,7 @@ Three predictions sit side by side (``TrialPrediction``):
 * the compliance-aware verdict: the same test on the walk the trial's servo
   actually makes under the planned torques (``planner.compliance``), with its own
   ZMP trace and margin;
-* the predicted verdict: the most severe event ``planner.verdict.predict`` finds on
+* the predicted verdict: the most severe event ``slopewalk.planner.verdict.predict`` finds on
   the walk the servo loop makes through time (``planner.servo_loop``: its sway, the
   closed chain of double support, the output clipped at the torque limit):
   joint_limit, tip, strike, slip, foot_slide, or ``stable``; ``saturation`` (the loop
@@ -26,13 +26,13 @@ from dataclasses import dataclass
 
 import mujoco
 
-from bench.sim.floor import scene_corner_stiffness
-from bench.sim.model import scene_xml, servo_settings
-from bench.sim.playback import feedforward_stance_swing
-from planner.compliance import CompliantWalk, compliant_walk
-from planner.plan import Plan
-from planner.servo_loop import servo_walk
-from planner.verdict import Prediction, predict
+from slopewalk.bench.sim.floor import scene_corner_stiffness
+from slopewalk.bench.sim.model import scene_xml, servo_settings
+from slopewalk.bench.sim.playback import feedforward_stance_swing
+from slopewalk.planner.compliance import CompliantWalk, compliant_walk
+from slopewalk.planner.plan import Plan
+from slopewalk.planner.servo_loop import servo_walk
+from slopewalk.planner.verdict import Prediction, predict
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bench.sim.playback import Recording
-from planner.joints import LEFT
-from planner.plan import Plan
+from slopewalk.bench.sim.playback import Recording
+from slopewalk.planner.joints import LEFT
+from slopewalk.planner.plan import Plan
 
 
 @dataclass(frozen=True)

@@ -43,10 +43,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from bench.sim.floor import foot_loads
-from planner.ik import two_link_ik
-from planner.joints import LEFT
-from planner.trajectory import Curve
+from slopewalk.bench.sim.floor import foot_loads
+from slopewalk.planner.ik import two_link_ik
+from slopewalk.planner.joints import LEFT
+from slopewalk.planner.trajectory import Curve
 
 
 def leg_shortening(plan, sink: np.ndarray) -> np.ndarray:

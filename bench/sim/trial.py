@@ -35,18 +35,18 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from bench.controllers import check_controller_name
-from bench.sim.events import Event, detect, loaded_tilt, verdict
-from bench.sim.model import SceneError, check_scene_options
-from bench.sim.playback import Recording, on_rows, play
-from bench.sim.prediction import predict_trial
-from bench.sim.support import support_difference
-from planner.joints import stance_swing_to_left_right
-from planner.plan import Plan, plan_walk
-from planner.spec import RobotSpec
-from planner.trajectory import GaitParams
-from planner.verdict import TIP_ANGLE
-from planner.zmp import signed_margin
+from slopewalk.bench.controllers import check_controller_name
+from slopewalk.bench.sim.events import Event, detect, loaded_tilt, verdict
+from slopewalk.bench.sim.model import SceneError, check_scene_options
+from slopewalk.bench.sim.playback import Recording, on_rows, play
+from slopewalk.bench.sim.prediction import predict_trial
+from slopewalk.bench.sim.support import support_difference
+from slopewalk.planner.joints import stance_swing_to_left_right
+from slopewalk.planner.plan import Plan, plan_walk
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.verdict import TIP_ANGLE
+from slopewalk.planner.zmp import signed_margin
 
 G = 9.81
 
@@ -75,7 +75,7 @@ class TrialSpec:
         actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
         timestep: Simulation step [s].
         controller: ``MODULE:CALLABLE`` of a closed-loop controller (observation -> action,
-            ``bench.sim.env``), or None: the plan played open loop by ``mujoco.rollout``.
+            ``slopewalk.bench.sim.env``), or None: the plan played open loop by ``mujoco.rollout``.
         command_noise: σ of white noise on every open-loop command row [rad], in
             [0, ``MAX_COMMAND_NOISE``] (``playback.noisy``); 0: none.
         noise_seed: Seed of that noise, ≥ 0.
@@ -138,7 +138,7 @@ class TrialResult:
     compliant_verdict: str = "stable"  # the paper's test on the walk the servo reaches
     compliant_min_margin: float = float("nan")  # [m]
     predicted_verdict: str = "stable"  # the most severe predicted event
-    predicted_events: list = field(default_factory=list)  # planner.verdict.PredictedEvent
+    predicted_events: list = field(default_factory=list)  # slopewalk.planner.verdict.PredictedEvent
     predicted_rotation: float = 0.0  # [rad] largest predicted turn of the support
     unplanned_contact_s: float = 0.0  # [s] foot-time touching where the plan has it lifted
     missed_contact_s: float = 0.0  # [s] foot-time lifted where the plan has it down
@@ -279,7 +279,7 @@ def run_trial(
     start = time.perf_counter()
     plan = plan or plan_walk(spec, trial.gait)
     if recording is None and trial.controller is not None:
-        from bench.sim.closed_loop import play_controller
+        from slopewalk.bench.sim.closed_loop import play_controller
 
         recording = play_controller(spec, trial, plan)
     recording = recording or play(

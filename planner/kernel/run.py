@@ -37,12 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
-from planner.joints import JOINT_KINDS
-from planner.kernel import sample as sm
-from planner.kernel import tables as tb
-from planner.kinematics import gravity_in_slope
-from planner.spec import RobotSpec
-from planner.trajectory import Timeline
+from slopewalk.planner.joints import JOINT_KINDS
+from slopewalk.planner.kernel import sample as sm
+from slopewalk.planner.kernel import tables as tb
+from slopewalk.planner.kinematics import gravity_in_slope
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import Timeline
 
 REFINE_ITERATIONS = 12  # parabolic steps per local minimum at most
 SKIP_SAFETY = 8.0  # depth factor of the bound that skips a minimum (``_refine_all``)

@@ -63,7 +63,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from planner.kernel import tables as tb
+from slopewalk.planner.kernel import tables as tb
 
 # Row layout of a plan sample (``write_rows``): where each quantity sits.
 Q, QD, QDD, TAU = 0, 8, 16, 24  # (8,) each: Table-I order [rad, rad/s, rad/s², N m]

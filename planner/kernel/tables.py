@@ -25,10 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from planner.joints import LEFT, RIGHT
-from planner.kinematics import Chain
-from planner.spec import RobotSpec
-from planner.trajectory import Timeline
+from slopewalk.planner.joints import LEFT, RIGHT
+from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.trajectory import Timeline
 
 # float columns of a piece
 T0, T1, STANCE_X, TOWARDS = 0, 1, 2, 3

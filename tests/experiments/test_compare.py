@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from bench.experiments.compare import (
+from slopewalk.bench.experiments.compare import (
     CASES,
     TOLERANCE_FRACTION,
     TOLERANCE_MM,

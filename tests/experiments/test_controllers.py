@@ -2,10 +2,10 @@
 
 from pathlib import Path
 
-from bench.experiments.controllers import OPEN_LOOP, compare_controllers, report
-from bench.experiments.sweep_config import sweep_from_dict
+from slopewalk.bench.experiments.controllers import OPEN_LOOP, compare_controllers, report
+from slopewalk.bench.experiments.sweep_config import sweep_from_dict
 
-OPEN_LOOP_POLICY = "bench.sim.env:open_loop"
+OPEN_LOOP_POLICY = "slopewalk.bench.sim.env:open_loop"
 
 
 def test_the_table_counts_walks_and_the_open_loop_policy_changes_none():

@@ -9,13 +9,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bench.cli import main
-from bench.experiments.envelope import compare_budgets, convergence_cells
-from bench.experiments.envelope_cell import run_cell
-from bench.experiments.envelope_config import envelope_from_dict
-from bench.experiments.envelope_table import ENVELOPE
-from bench.experiments.sweep_table import read_table
-from bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.cli import main
+from slopewalk.bench.experiments.envelope import compare_budgets, convergence_cells
+from slopewalk.bench.experiments.envelope_cell import run_cell
+from slopewalk.bench.experiments.envelope_config import envelope_from_dict
+from slopewalk.bench.experiments.envelope_table import ENVELOPE
+from slopewalk.bench.experiments.sweep_table import read_table
+from slopewalk.bench.sim.model import ACTUATOR_MODES
 from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
 
 TINY = """\
@@ -27,7 +27,7 @@ slope = [0, 15]
 population = 10
 generations = 4
 """
-ENVELOPE_CMD = [sys.executable, "-m", "bench.cli", "envelope"]
+ENVELOPE_CMD = [sys.executable, "-m", "slopewalk.bench.cli", "envelope"]
 
 
 @pytest.fixture(scope="module")
@@ -205,9 +205,9 @@ def test_convergence_counts_flips_and_the_largest_margin_change(tmp_path):
 
 def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
     """The GA's best may be reachable at its samples only; the next best that plans is taken."""
-    from bench.experiments.envelope_cell import _choose, _Pool
-    from planner.errors import UnreachableError
-    from planner.plan import plan_walk
+    from slopewalk.bench.experiments.envelope_cell import _choose, _Pool
+    from slopewalk.planner.errors import UnreachableError
+    from slopewalk.planner.plan import plan_walk
 
     config = envelope_from_dict({"grid": {"step_time": [1.0], "slope": [0]}}, base_dir=tmp_path)
     cell = config.cells[0]
@@ -228,7 +228,7 @@ def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
 
 
 def test_rows_are_found_by_their_id_as_written(tmp_path):
-    from bench.experiments.envelope import _by_id
+    from slopewalk.bench.experiments.envelope import _by_id
 
     path = tmp_path / "e.csv"
     path.write_bytes(ENVELOPE.header + ENVELOPE.format_row({"cell_id": "123456789012"}))
@@ -236,12 +236,12 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
 
 
 def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
-    """The plan as a controller (``bench.sim.env:open_loop``) walks as open loop does; the
+    """The plan as a controller (``slopewalk.bench.sim.env:open_loop``) walks as open loop does; the
     ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""
-    from bench.experiments.envelope_table import envelope_format, sim_columns
+    from slopewalk.bench.experiments.envelope_table import envelope_format, sim_columns
 
-    plan_policy = "bench.sim.env:open_loop"
-    ankle = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    plan_policy = "slopewalk.bench.sim.env:open_loop"
+    ankle = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
     config = tmp_path / "c.toml"
     config.write_text(
         'steps = 2\n[grid]\nstep_time = [1.0]\nslope = [0]\nactuators = ["stiff"]\n'

@@ -5,14 +5,14 @@ import sys
 import numpy as np
 import pytest
 
-from bench.cli import main
-from bench.experiments.envelope_config import (
+from slopewalk.bench.cli import main
+from slopewalk.bench.experiments.envelope_config import (
     DEFAULT_ENVELOPE,
     EnvelopeError,
     envelope_from_dict,
     load_envelope,
 )
-from bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.sim.model import ACTUATOR_MODES
 
 GOOD = {"grid": {"step_time": [1.0], "slope": [0]}}
 
@@ -65,20 +65,21 @@ def _with(section: str, **values) -> dict:
             "grid.controller: controller 'no_such_module:f': no module named 'no_such_module'",
         ),
         (
-            _with("grid", controller=["bench.controllers.ankle_cop:nothing"]),
-            "module 'bench.controllers.ankle_cop' has no 'nothing'",
+            _with("grid", controller=["slopewalk.bench.controllers.ankle_cop:nothing"]),
+            "module 'slopewalk.bench.controllers.ankle_cop' has no 'nothing'",
         ),
         (
-            _with("grid", controller="bench.controllers.ankle_cop:ankle_cop_feedback"),
-            "grid.controller = 'bench.controllers.ankle_cop:ankle_cop_feedback': must be a "
+            _with("grid", controller="slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"),
+            "grid.controller = 'slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback': "
+            "must be a "
             "non-empty list",
         ),
         (
             _with(
                 "grid",
                 controller=[
-                    "bench.controllers:load_controller",
-                    "bench.sim.closed_loop:load_controller",
+                    "slopewalk.bench.controllers:load_controller",
+                    "slopewalk.bench.sim.closed_loop:load_controller",
                 ],
             ),
             "their callables' names (load_controller, load_controller) must differ",
@@ -127,7 +128,7 @@ def test_both_families_give_one_cell_each(tmp_path):
 
 
 def test_controllers_are_walked_by_every_cell_and_enter_its_id_only_when_set(tmp_path):
-    ankle = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    ankle = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
     plain = envelope_from_dict(GOOD, base_dir=tmp_path)
     none = envelope_from_dict(_with("grid", controller=["none"]), base_dir=tmp_path)
     both = envelope_from_dict(_with("grid", controller=["none", ankle, ankle]), base_dir=tmp_path)

@@ -6,18 +6,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.experiments.envelope_cell import run_cell
-from bench.experiments.envelope_config import envelope_from_dict
-from bench.experiments.envelope_controllers import (
+from slopewalk.bench.experiments.envelope_cell import run_cell
+from slopewalk.bench.experiments.envelope_config import envelope_from_dict
+from slopewalk.bench.experiments.envelope_controllers import (
     EnvelopeTableError,
     compare_envelope,
     envelope_report,
     table_jobs,
 )
-from bench.experiments.envelope_table import ENVELOPE
+from slopewalk.bench.experiments.envelope_table import ENVELOPE
 
-PLAN_POLICY = "bench.sim.env:open_loop"
-ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"
+PLAN_POLICY = "slopewalk.bench.sim.env:open_loop"
+ANKLE = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +83,7 @@ def test_a_table_without_the_envelope_columns_is_refused(tmp_path):
 
 
 def test_the_command_appends_the_envelope_section_and_names_itself(table, tmp_path, capsys):
-    from bench.cli import main
+    from slopewalk.bench.cli import main
 
     sweep = tmp_path / "s.toml"
     sweep.write_text("steps = 1\n[[trial]]\nstep_time = 1.0\n")

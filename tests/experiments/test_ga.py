@@ -10,7 +10,7 @@ import pytest
 from pymoo.algorithms.moo.nsga2 import NSGA2
 from pymoo.algorithms.soo.nonconvex.ga import GA
 
-from bench.experiments.ga import (
+from slopewalk.bench.experiments.ga import (
     GaSettings,
     _drive,
     _PymooProblem,
@@ -19,9 +19,9 @@ from bench.experiments.ga import (
     run_ga,
     run_nsga2,
 )
-from bench.experiments.ga_operators import ArrayGA
-from planner.errors import SlopewalkError
-from planner.gait_search import (
+from slopewalk.bench.experiments.ga_operators import ArrayGA
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait_search import (
     PENALTY,
     Bounds,
     GaitProblem,
@@ -35,9 +35,9 @@ from planner.gait_search import (
     leg_vectors,
     objectives,
 )
-from planner.joints import JOINT_KINDS
-from planner.plan import evaluate, plan_walk
-from planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.joints import JOINT_KINDS
+from slopewalk.planner.plan import evaluate, plan_walk
+from slopewalk.planner.trajectory import GaitParams, Timeline
 
 # ---------------------------------------------------------------- synthetic problem
 
@@ -391,7 +391,7 @@ def test_settings_refuse_bad_values(kwargs, message):
 
 def _run(*args):
     return subprocess.run(
-        [sys.executable, "-m", "bench.cli", "optimize", *args],
+        [sys.executable, "-m", "slopewalk.bench.cli", "optimize", *args],
         capture_output=True,
         text=True,
         timeout=120,
@@ -418,7 +418,7 @@ def test_cli_reports_an_infeasible_penalty_run_plainly(tmp_path):
 def test_problem_definition_needs_neither_pymoo_nor_mujoco():
     code = (
         "import sys; sys.modules['pymoo'] = None; sys.modules['mujoco'] = None; "
-        "import planner.gait_search"
+        "import slopewalk.planner.gait_search"
     )
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
 
@@ -440,9 +440,9 @@ def test_a_quiet_ga_makes_no_multiprocessing_lock(tmp_path):
         "made = []\n"
         "rt.register = lambda name, kind: made.append(kind)\n"
         "import numpy as np\n"
-        "from bench.experiments.ga import GaSettings, run_ga\n"
-        "from planner.gait_search import GaitProblem, ga_params\n"
-        "from planner.spec import load_spec\n"
+        "from slopewalk.bench.experiments.ga import GaSettings, run_ga\n"
+        "from slopewalk.planner.gait_search import GaitProblem, ga_params\n"
+        "from slopewalk.planner.spec import load_spec\n"
         "spec = load_spec()\n"
         "problem = GaitProblem(spec, ga_params(spec, 1.0, 0.0))\n"
         "run_ga(problem, GaSettings(population=8, generations=2, seed=0))\n"

@@ -15,10 +15,15 @@ from pathlib import Path
 import pytest
 from conftest import session_pids
 
-from bench.cli import main
-from bench.experiments.sweep import SweepSummary, run_one, run_sweep
-from bench.experiments.sweep_config import SWEEPS_DIR, SweepError, load_sweep, sweep_from_dict
-from bench.experiments.sweep_table import (
+from slopewalk.bench.cli import main
+from slopewalk.bench.experiments.sweep import SweepSummary, run_one, run_sweep
+from slopewalk.bench.experiments.sweep_config import (
+    SWEEPS_DIR,
+    SweepError,
+    load_sweep,
+    sweep_from_dict,
+)
+from slopewalk.bench.experiments.sweep_table import (
     COLUMNS,
     CONTROLLER_COLUMNS,
     CONTROLLER_HEADER,
@@ -29,7 +34,7 @@ from bench.experiments.sweep_table import (
 )
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
-SWEEP = [sys.executable, "-m", "bench.cli", "sweep"]
+SWEEP = [sys.executable, "-m", "slopewalk.bench.cli", "sweep"]
 BANANA = format_row(
     {"trial_id": "0123456789ab", "analytic_verdict": "stable", "simulated_verdict": "banana"}
 )
@@ -126,7 +131,7 @@ def test_a_failing_trial_is_an_error_row(tmp_path, short_robot):
 
 
 def test_recording_per_trial(tmp_path):
-    pytest.importorskip("bench.report.recording")
+    pytest.importorskip("slopewalk.bench.report.recording")
     trial = load_sweep(SMOKE).trials[0]
     row = run_one(trial, str(tmp_path))
     assert row["error"] == ""
@@ -144,7 +149,7 @@ def test_reference_run_is_complete(reference, tmp_path):
     1 s flat stable in both views; 0.4 s leaves the foot and slips; the servo on 15°
     falls; doubled leg masses leave the foot and tip.
     """
-    from bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial import run_trial
 
     rows, data = reference
     smoke = load_sweep(SMOKE)
@@ -436,7 +441,15 @@ def test_bad_input_has_no_traceback(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text("[grid]\nfriction = [-1]\n")
     result = subprocess.run(
-        [sys.executable, "-m", "bench.cli", "sweep", str(path), "--out", str(tmp_path / "out")],
+        [
+            sys.executable,
+            "-m",
+            "slopewalk.bench.cli",
+            "sweep",
+            str(path),
+            "--out",
+            str(tmp_path / "out"),
+        ],
         capture_output=True,
         text=True,
         timeout=120,
@@ -448,7 +461,7 @@ def test_bad_input_has_no_traceback(tmp_path):
 
 def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
     """Open loop and the plan as a controller: same verdicts, told apart by the last column."""
-    policy = "bench.sim.env:open_loop"
+    policy = "slopewalk.bench.sim.env:open_loop"
     config = sweep_from_dict(
         {"steps": 1, "grid": {"step_time": [1.0, 0.4], "controller": ["none", policy]}},
         base_dir=tmp_path,
@@ -477,7 +490,7 @@ def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
 def test_a_noisy_sweep_writes_each_seed_and_its_noise(tmp_path):
     """Two seeds of 0.05° noise (large, to move every row's numbers): two rows per trial,
     the noise column last, and the seeds' walks differ; the table reads as a noisy one."""
-    from bench.experiments.sweep_table import NOISE_COLUMNS, sweep_format
+    from slopewalk.bench.experiments.sweep_table import NOISE_COLUMNS, sweep_format
 
     config = tmp_path / "n.toml"
     config.write_text("seed = [0, 1]\ncommand_noise = 0.05\nsteps = 1\n[grid]\nstep_time = [1.0]\n")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.experiments.sweep_config import (
+from slopewalk.bench.experiments.sweep_config import (
     DEFAULT_SWEEP,
     SWEEPS_DIR,
     TIMESTEP,
@@ -21,7 +21,7 @@ from bench.experiments.sweep_config import (
 )
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
-ANKLE = "bench.controllers.ankle_cop:ankle_cop_feedback"
+ANKLE = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
 
 
 def _parse(data: dict, base_dir: Path = Path(".")):
@@ -304,7 +304,7 @@ def test_command_noise_enters_the_id_the_table_and_the_trial_only_when_set():
 def test_the_checks_do_not_walk_the_seeds(monkeypatch):
     """The per-value checks build one trial per value of each other axis, however many seeds
     (a check per seed would cost ~1 ms each: minutes for a long replica list)."""
-    from bench.experiments.sweep_trials import SweepTrial
+    from slopewalk.bench.experiments.sweep_trials import SweepTrial
 
     calls = []
     original = SweepTrial.trial_spec

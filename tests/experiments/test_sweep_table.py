@@ -4,8 +4,15 @@ import random
 
 import pytest
 
-from bench.experiments.sweep_config import SweepError
-from bench.experiments.sweep_table import COLUMNS, DECIMALS, HEADER, SweepTable, format_row, text
+from slopewalk.bench.experiments.sweep_config import SweepError
+from slopewalk.bench.experiments.sweep_table import (
+    COLUMNS,
+    DECIMALS,
+    HEADER,
+    SweepTable,
+    format_row,
+    text,
+)
 
 ID = "0123456789ab"
 

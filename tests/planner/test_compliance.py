@@ -4,10 +4,10 @@ by τ/kp to first order."""
 import numpy as np
 import pytest
 
-from planner.compliance import compliant_walk
-from planner.errors import SlopewalkError
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.planner.compliance import compliant_walk
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 from conftest import away_from_phase_changes
 
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import inverse_dynamics
-from planner.plan import plan_walk
-from planner.reference import solve_reference
-from planner.trajectory import GaitParams, Timeline
-from planner.zmp import cop_of_wrench, zmp_multibody
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.newton_euler import inverse_dynamics
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.reference import solve_reference
+from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.zmp import cop_of_wrench, zmp_multibody
 
 
 def _rate(x: np.ndarray, t: np.ndarray, stance: np.ndarray) -> np.ndarray:

@@ -9,12 +9,12 @@ on the compiled plan (``plan_walk``) and on the numpy reference (``solve_referen
 import numpy as np
 import pytest
 
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import inverse_dynamics_poses
-from planner.plan import plan_walk
-from planner.reference import solve_reference
-from planner.trajectory import GaitParams, Timeline, footprint_y
-from planner.zmp import zmp_multibody
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.newton_euler import inverse_dynamics_poses
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.reference import solve_reference
+from slopewalk.planner.trajectory import GaitParams, Timeline, footprint_y
+from slopewalk.planner.zmp import zmp_multibody
 
 SOURCES = ("kernel", "reference")
 KEYS = ("q", "stance_sole", "swing_sole", "stance", "margin", "zmp")

@@ -4,10 +4,10 @@ import math
 
 import pytest
 
-from planner.errors import GaitError
-from planner.plan import plan_walk
-from planner.ranges import Range
-from planner.trajectory import GaitParams
+from slopewalk.planner.errors import GaitError
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.ranges import Range
+from slopewalk.planner.trajectory import GaitParams
 
 NAN, INF = math.nan, math.inf
 

@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from planner.errors import GaitError
-from planner.plan import evaluate, plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.planner.errors import GaitError
+from slopewalk.planner.plan import evaluate, plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.mark.parametrize(

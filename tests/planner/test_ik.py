@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from planner.errors import UnreachableError
-from planner.ik import two_link_ik
-from planner.trajectory import Curve
+from slopewalk.planner.errors import UnreachableError
+from slopewalk.planner.ik import two_link_ik
+from slopewalk.planner.trajectory import Curve
 
 SHANK, THIGH = 0.08, 0.07  # [m]
 

@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.gait_search import GaitProblem, ga_params, joint_gap
-from planner.kernel import sample as sm
-from planner.kernel.run import kernel_walk
-from planner.kernel.tables import T0, T1, GaitTable, limit_samples
-from planner.plan import plan_walk, score
-from planner.reference import evaluate_reference, solve_reference
-from planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.gait_search import GaitProblem, ga_params, joint_gap
+from slopewalk.planner.kernel import sample as sm
+from slopewalk.planner.kernel.run import kernel_walk
+from slopewalk.planner.kernel.tables import T0, T1, GaitTable, limit_samples
+from slopewalk.planner.plan import plan_walk, score
+from slopewalk.planner.reference import evaluate_reference, solve_reference
+from slopewalk.planner.trajectory import GaitParams, Timeline
 
 ROOT = Path(__file__).resolve().parents[2]
 SLOPES_DEG = (-30.0, -12.0, 0.0, 17.5, 35.0)
@@ -236,7 +236,10 @@ def test_ga_margin_is_the_walk_minimum(spec):
 def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path):
     """A read-only install, no NUMBA_CACHE_DIR: compiled code goes to ~/.cache/slopewalk/numba."""
     install = tmp_path / "site"
-    shutil.copytree(ROOT / "planner", install / "planner", ignore=shutil.ignore_patterns("__py*"))
+    shutil.copytree(
+        ROOT / "planner", install / "slopewalk" / "planner", ignore=shutil.ignore_patterns("__py*")
+    )
+    shutil.copy(ROOT / "slopewalk" / "__init__.py", install / "slopewalk" / "__init__.py")
     for path in [install, *install.rglob("*")]:
         path.chmod(0o555 if path.is_dir() else 0o444)
     home = tmp_path / "home"
@@ -244,7 +247,8 @@ def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "XDG_"))}
     env.update(HOME=str(home), PYTHONPATH=str(install), PYTHONDONTWRITEBYTECODE="1")
     code = (
-        "import planner.plan as p, planner.spec as s, planner.trajectory as t;"
+        "import slopewalk.planner.plan as p, slopewalk.planner.spec as s, "
+        "slopewalk.planner.trajectory as t;"
         "spec = s.load_spec(); plan = p.plan_walk(spec, t.GaitParams.nominal(spec, 1.0));"
         f"assert p.__file__.startswith({str(install)!r}); print(plan.t.size)"
     )
@@ -267,7 +271,7 @@ def test_openmp_workers_sleep_between_kernel_calls_unless_the_user_says(preset, 
     env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
     if preset:
         env["OMP_WAIT_POLICY"] = preset
-    code = "import os, planner.kernel; print(os.environ['OMP_WAIT_POLICY'])"
+    code = "import os, slopewalk.planner.kernel; print(os.environ['OMP_WAIT_POLICY'])"
     out = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
     )

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from conftest import away_from_phase_changes
 
-from planner.errors import UnreachableError
-from planner.kinematics import Chain, dh_transform, rotation_slope_to_world
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.planner.errors import UnreachableError
+from slopewalk.planner.kinematics import Chain, dh_transform, rotation_slope_to_world
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 def _rot(axis: str, angle: float) -> np.ndarray:
@@ -84,7 +84,7 @@ def test_fk_of_ik_returns_the_targets(spec, step_time, slope_deg, profile):
     pelvis = (frames[:, 4, :3, 3] + frames[:, 5, :3, 3]) / 2
     # pelvis height above the plane is Hz, swing sole height the planned lift
     np.testing.assert_allclose(pelvis[:, 2], params.hip_height, atol=1e-9)
-    from planner.trajectory import Timeline
+    from slopewalk.planner.trajectory import Timeline
 
     timeline = Timeline.of(params)
     lift = params.swing_lift * timeline.lift_shape.p

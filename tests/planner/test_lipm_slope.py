@@ -13,10 +13,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from planner.kinematics import gravity_in_slope
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
-from planner.zmp import zmp_lipm
+from slopewalk.planner.kinematics import gravity_in_slope
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import zmp_lipm
 
 
 def _gravity_by_hand(slope: float, g: float = 9.81) -> np.ndarray:
@@ -64,7 +64,7 @@ def test_lipm_matches_the_multibody_zmp_on_a_slope_at_slow_steps(spec, slope_deg
 
 def test_cop_and_friction_ratio_of_light_and_vanishing_normal_forces():
     """A light foot still has a CoP and a ratio; no normal force has neither (NaN, inf)."""
-    from planner.zmp import cop_of_wrench, friction_ratio
+    from slopewalk.planner.zmp import cop_of_wrench, friction_ratio
 
     force = np.array([[0.03, -0.04, 0.5], [0.1, 0.0, 0.0], [0.1, 0.0, -0.2]])  # [N]
     moment = np.array([[0.01, -0.02, 0.0], [0.01, 0.02, 0.0], [0.0, 0.0, 0.0]])  # [N m]

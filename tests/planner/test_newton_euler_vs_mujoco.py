@@ -14,11 +14,11 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from mj_reference import StanceRootedInverse
 
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import inverse_dynamics
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
-from planner.zmp import cop_of_wrench
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.newton_euler import inverse_dynamics
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import cop_of_wrench
 
 # Random states: angles within the joints' reach, rates and accelerations of a fast walk.
 ANGLE = np.array([0.5, 0.8, 1.2, 0.8, 0.8, 1.2, 0.8, 0.5])  # [rad], half-ranges

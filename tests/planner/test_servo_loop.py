@@ -4,11 +4,11 @@ fixed point, a soft loop rings at its own frequency about it, and the output is 
 import numpy as np
 import pytest
 
-from planner.compliance import compliant_walk
-from planner.errors import SlopewalkError
-from planner.plan import plan_walk
-from planner.servo_loop import linearised, servo_walk
-from planner.trajectory import GaitParams
+from slopewalk.planner.compliance import compliant_walk
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.servo_loop import linearised, servo_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +27,7 @@ def test_the_mass_matrix_of_single_support_is_symmetric_positive(plan):
 
 def test_the_linearisation_predicts_the_torque_of_a_nearby_pose(spec, plan):
     """τ(q + δ) ≈ τ(q) + K_g δ to second order in δ."""
-    from planner.compliance import _Dynamics
+    from slopewalk.planner.compliance import _Dynamics
 
     tau, _, k, _ = linearised(plan)
     delta = np.full(8, 1e-3)
@@ -81,7 +81,7 @@ def test_a_limited_servo_falls_behind(spec, plan):
 def test_double_support_holds_the_second_sole(spec, plan):
     """With the closed chain the second sole's pose (x, z, roll, pitch) stays put through each
     double support, to first order; with the plan's split alone it sways with the legs."""
-    from planner.servo_loop import HELD, support_jacobian
+    from slopewalk.planner.servo_loop import HELD, support_jacobian
 
     kw = dict(stiffness=spec.stiffness, armature=spec.armature)
     jac = support_jacobian(plan)[:, HELD]

@@ -6,8 +6,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from planner.errors import SpecError
-from planner.spec import default_spec_path, load_spec, spec_from_dict
+from slopewalk.planner.errors import SpecError
+from slopewalk.planner.spec import default_spec_path, load_spec, spec_from_dict
 
 
 def _data():

@@ -7,9 +7,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from planner.kinematics import gravity_in_slope
-from planner.plan import plan_walk
-from planner.tipping import (
+from slopewalk.planner.kinematics import gravity_in_slope
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.tipping import (
     PITCH,
     ROLL,
     edge_inertia,
@@ -22,7 +22,7 @@ from planner.tipping import (
     rocking,
     support_lines,
 )
-from planner.trajectory import GaitParams
+from slopewalk.planner.trajectory import GaitParams
 
 
 def test_constant_push_integrates_to_a_parabola():

@@ -5,9 +5,9 @@ import tomllib
 import numpy as np
 import pytest
 
-from planner.plan import plan_walk
-from planner.spec import default_spec_path, spec_from_dict
-from planner.trajectory import GaitParams
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.spec import default_spec_path, spec_from_dict
+from slopewalk.planner.trajectory import GaitParams
 
 
 def _scaled_spec(factor: float):
@@ -46,7 +46,7 @@ def test_nominal_gait_scales_with_the_robot(spec, factor):
 
 def test_the_swing_sole_lands_at_rest_exactly_at_the_planned_touch_down(spec):
     """Height 0 and zero normal speed at each DSP start (the clamped end of the height spline)."""
-    from planner.plan import plan_walk
+    from slopewalk.planner.plan import plan_walk
 
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=2))
     dt = plan.params.dt

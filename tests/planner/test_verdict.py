@@ -5,12 +5,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from planner.compliance import compliant_walk
-from planner.joints import JOINT_NAMES
-from planner.plan import plan_walk
-from planner.tipping import excursion_integral
-from planner.trajectory import GaitParams
-from planner.verdict import (
+from slopewalk.planner.compliance import compliant_walk
+from slopewalk.planner.joints import JOINT_NAMES
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.tipping import excursion_integral
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.verdict import (
     SLIP_DISTANCE,
     PredictedEvent,
     planned_slide,

@@ -4,7 +4,7 @@ import numpy as np
 from scipy.spatial import ConvexHull
 from scipy.spatial.distance import cdist
 
-from planner.zmp import foot_corners, friction_ratio, signed_margin, support_polygon
+from slopewalk.planner.zmp import foot_corners, friction_ratio, signed_margin, support_polygon
 
 
 def test_margin_of_a_square():

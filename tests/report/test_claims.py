@@ -15,20 +15,20 @@ import numpy as np
 import pytest
 from mj_reference import StanceRootedInverse
 
-from bench.sim.trial import TrialSpec, run_trial
-from planner.kinematics import gravity_in_slope
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
-from planner.zmp import cop_of_wrench, signed_margin
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.kinematics import gravity_in_slope
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import cop_of_wrench, signed_margin
 
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     """The smoke sweep with --report: (output dir, {claim: cells}, sweep rows)."""
     out = tmp_path_factory.mktemp("report")
-    smoke = resources.files("bench.experiments") / "sweeps" / "smoke.toml"
+    smoke = resources.files("slopewalk.bench.experiments") / "sweeps" / "smoke.toml"
     result = subprocess.run(
-        [sys.executable, "-m", "bench.cli", "sweep", str(smoke), "--workers", "1", "--report",
+        [sys.executable, "-m", "slopewalk", "sweep", str(smoke), "--workers", "1", "--report",
          "--out", str(out)],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
@@ -139,7 +139,7 @@ def test_torque_claim_stance_and_swing(spec, report):
 
 
 def test_a_zero_zmp_shift_is_written_as_zero_whatever_the_rounding_noise(spec):
-    from bench.report.claims import mass_claims
+    from slopewalk.bench.report.claims import mass_claims
 
     heavier = mass_claims([], spec)[0]  # 10x every mass: the ZMP moves by rounding noise only
     assert heavier["analytic"].startswith("max ZMP shift 0.0000 mm;")

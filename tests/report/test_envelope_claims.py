@@ -1,6 +1,6 @@
 """Claims 1 and 2 from the envelope: the fastest flat step time, the steepest slopes at 1 s."""
 
-from bench.report.envelope_claims import envelope_cell_note, envelope_claims
+from slopewalk.bench.report.envelope_claims import envelope_cell_note, envelope_claims
 
 
 def _row(t, s, feasible, walks):
@@ -65,7 +65,7 @@ def test_the_ga_rows_cite_the_envelope_cell():
 
 
 def test_boundaries_are_given_per_family():
-    from bench.report.envelope_claims import boundaries_markdown, family_boundaries
+    from slopewalk.bench.report.envelope_claims import boundaries_markdown, family_boundaries
 
     extended = [
         {**_row(0.3, 0.0, True, False), "family": "extended"},

@@ -3,7 +3,7 @@
 import numpy as np
 from matplotlib.collections import LineCollection
 
-from bench.report.envelope_figure import edges, envelope_figure, grids
+from slopewalk.bench.report.envelope_figure import edges, envelope_figure, grids
 
 TIMES = (2.0, 1.0, 0.5)
 SLOPES = (-10.0, 0.0, 15.0, 30.0)

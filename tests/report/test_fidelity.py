@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from bench.report.fidelity import FidelityError, fidelity_report
+from slopewalk.bench.report.fidelity import FidelityError, fidelity_report
 
 
 def _row(paper, predicted, simulated, **extra):
@@ -40,7 +40,7 @@ def test_agreement_counts_walks_against_does_not():
 
 
 def test_each_disagreement_gets_its_class():
-    from bench.report.fidelity import cause_class
+    from slopewalk.bench.report.fidelity import cause_class
 
     sway = _row("stable", "stable", "fall", actuators="servo", compliant_min_margin_mm=3.3)
     assert cause_class(sway) == "servo sway"
@@ -88,7 +88,7 @@ def test_cli_refuses_a_missing_table_in_one_line(tmp_path):
     out = tmp_path / "f.md"
     command = ["fidelity", str(tmp_path / "no.csv"), "--out", str(out)]
     run = subprocess.run(
-        [sys.executable, "-m", "bench.cli", *command], capture_output=True, text=True
+        [sys.executable, "-m", "slopewalk.bench.cli", *command], capture_output=True, text=True
     )
     assert run.returncode == 2
     assert run.stderr.strip().count("\n") == 0 and "no such file" in run.stderr

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from matplotlib.colors import to_rgba
 
-from bench.report import figures
-from bench.sim.trial import TrialSpec, run_trial
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.report import figures
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture

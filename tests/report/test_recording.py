@@ -9,14 +9,20 @@ import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-import bench.report.recording
-from bench.report.recording import FORCE_SCALE, FRAME_RATE, LIFT, RecordingError, record_trial
-from bench.sim.playback import build_model, play
-from bench.sim.trial import TrialSpec, run_trial
-from planner.joints import MJCF_JOINTS
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+import slopewalk.bench.report.recording
+from slopewalk.bench.report.recording import (
+    FORCE_SCALE,
+    FRAME_RATE,
+    LIFT,
+    RecordingError,
+    record_trial,
+)
+from slopewalk.bench.sim.playback import build_model, play
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.joints import MJCF_JOINTS
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 def simulate(spec, step_time: float, slope: float = 0.0):
@@ -207,7 +213,7 @@ def test_events_and_verdicts_are_log_lines(spec, tmp_path):
 
 
 def test_a_closed_loop_recording_names_its_controller(spec, tmp_path):
-    name = "bench.controllers.capture_point:capture_point_pelvis"
+    name = "slopewalk.bench.controllers.capture_point:capture_point_pelvis"
     trial = TrialSpec(GaitParams.nominal(spec, 1.0, steps=1), controller=name)
     plan = plan_walk(spec, trial.gait)
     result = run_trial(spec, trial, plan=plan)
@@ -222,7 +228,7 @@ def test_a_failure_mid_write_leaves_no_file(walk, tmp_path, monkeypatch):
     def boom(*args):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(bench.report.recording, "_log_plots", boom)
+    monkeypatch.setattr(slopewalk.bench.report.recording, "_log_plots", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         record_trial(tmp_path / "new.rrd", plan, result)
     (tmp_path / "old.rrd").write_bytes(b"previous recording")

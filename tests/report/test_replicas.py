@@ -1,6 +1,6 @@
 """Replicas: per-seed agreement and the trials whose simulated verdict the seed decides."""
 
-from bench.report.replicas import flipping, replica_section
+from slopewalk.bench.report.replicas import flipping, replica_section
 
 
 def _row(step_time, seed, simulated, predicted, paper="stable"):
@@ -55,8 +55,8 @@ def test_one_seed_has_no_section():
 
 
 def test_a_disagreement_in_a_one_seed_table_says_when_the_noise_decides_its_trial():
-    from bench.report.fidelity import fidelity_report
-    from bench.report.replicas import undecided
+    from slopewalk.bench.report.fidelity import fidelity_report
+    from slopewalk.bench.report.replicas import undecided
 
     assert undecided({"noise": ROWS}) == {
         (1.0, 0.0, 1.0, "stiff", "default", ""): "walks under 2/3 seeds of command noise (noise)"

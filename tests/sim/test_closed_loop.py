@@ -7,11 +7,11 @@ import sys
 import numpy as np
 import pytest
 
-from bench.controllers import SHIPPED, ControllerError, load_controller
-from bench.sim.trial import TrialSpec, run_trial
-from planner.trajectory import GaitParams
+from slopewalk.bench.controllers import SHIPPED, ControllerError, load_controller
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.trajectory import GaitParams
 
-OPEN_LOOP = "bench.sim.env:open_loop"
+OPEN_LOOP = "slopewalk.bench.sim.env:open_loop"
 
 
 @pytest.mark.parametrize("step_time", [1.0, 0.5])
@@ -55,9 +55,9 @@ def test_a_controller_name_is_checked_in_the_trial_spec(spec):
 
 def test_trial_cli_runs_a_shipped_controller_with_every_output(tmp_path):
     out, series, record = tmp_path / "t.json", tmp_path / "t.npz", tmp_path / "t.rrd"
-    name = "bench.controllers.ankle_cop:ankle_cop_feedback"
+    name = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
     result = subprocess.run(
-        [sys.executable, "-m", "bench.cli", "trial", "--step-time", "1", "--steps", "1",
+        [sys.executable, "-m", "slopewalk.bench.cli", "trial", "--step-time", "1", "--steps", "1",
          "--controller", name, "--out", str(out), "--series", str(series),
          "--record", str(record)],
         capture_output=True, text=True, timeout=300, cwd=tmp_path,

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from bench.sim.model import SceneError
-from bench.sim.playback import noisy, play
-from bench.sim.trial import MAX_COMMAND_NOISE, TrialSpec
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.model import SceneError
+from slopewalk.bench.sim.playback import noisy, play
+from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE, TrialSpec
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 def test_noisy_adds_seeded_white_noise_of_sigma():
@@ -43,7 +43,10 @@ def test_play_puts_the_noise_on_the_commands_and_the_walk_moves_by_little(spec):
         ({"noise_seed": -1}, "noise_seed -1: must be an integer >= 0"),
         ({"noise_seed": 1.5}, "noise_seed 1.5: must be an integer >= 0"),
         (
-            {"command_noise": 1e-6, "controller": "bench.controllers.ankle_cop:ankle_cop_feedback"},
+            {
+                "command_noise": 1e-6,
+                "controller": "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
+            },
             "noise is for the plan played open loop",
         ),
     ],

@@ -4,12 +4,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.sim.contact import decode
-from bench.sim.events import SLIP_DISTANCE, detect, verdict
-from bench.sim.playback import build_model, initial_state, play
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.contact import decode
+from slopewalk.bench.sim.events import SLIP_DISTANCE, detect, verdict
+from slopewalk.bench.sim.playback import build_model, initial_state, play
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 def _contact_force_path(model, data, R):

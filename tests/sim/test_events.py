@@ -10,8 +10,8 @@ rules firing on MuJoCo's own series.
 import numpy as np
 import pytest
 
-from bench.sim.contact import TrialSensors
-from bench.sim.events import (
+from slopewalk.bench.sim.contact import TrialSensors
+from slopewalk.bench.sim.events import (
     FALL_HEIGHT_FRACTION,
     LOADED_FRACTION,
     SLIP_DISTANCE,
@@ -21,7 +21,7 @@ from bench.sim.events import (
     loaded_tilt,
     verdict,
 )
-from bench.sim.playback import Recording
+from slopewalk.bench.sim.playback import Recording
 
 WEIGHT = 6.0  # [N]
 HIP = 0.2  # [m] planned hip height

@@ -4,12 +4,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.sim.model import servo_settings
-from bench.sim.playback import build_model, control_sequence, feedforward_torque, play
-from bench.sim.trial import TrialSpec, run_trial
-from planner.joints import stance_swing_to_left_right
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.model import servo_settings
+from slopewalk.bench.sim.playback import build_model, control_sequence, feedforward_torque, play
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.joints import stance_swing_to_left_right
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

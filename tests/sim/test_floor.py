@@ -5,14 +5,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.sim.floor import (
+from slopewalk.bench.sim.floor import (
     SoftFloor,
     corner_stiffness,
     impedance,
     scene_corner_stiffness,
     sole_equilibrium,
 )
-from bench.sim.model import scene_xml
+from slopewalk.bench.sim.model import scene_xml
 
 
 def test_impedance_follows_mujocos_sigmoid():

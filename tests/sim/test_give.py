@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from bench.sim.floor import SoftFloor, foot_deflection
-from bench.sim.model import servo_settings
-from bench.sim.playback import (
+from slopewalk.bench.sim.floor import SoftFloor, foot_deflection
+from slopewalk.bench.sim.model import servo_settings
+from slopewalk.bench.sim.playback import (
     build_model,
     control_sequence,
     floor_feedforward,
@@ -18,11 +18,11 @@ from bench.sim.playback import (
     play,
     recording_from_rollout,
 )
-from bench.sim.support import touch_downs
-from bench.sim.trial import TrialSpec, run_trial
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.support import touch_downs
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 STEP = 2.0  # [s] a slow walk: the give, not the dynamics, is what moves the CoP
 SETTLE = 0.5

@@ -15,11 +15,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.sim.model import scene_xml
-from planner.joints import MJCF_JOINTS, RIGHT, SIDE_PREFIX
-from planner.kinematics import Chain, gravity_in_slope
-from planner.newton_euler import inverse_dynamics
-from planner.zmp import cop_of_wrench, friction_ratio
+from slopewalk.bench.sim.model import scene_xml
+from slopewalk.planner.joints import MJCF_JOINTS, RIGHT, SIDE_PREFIX
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.newton_euler import inverse_dynamics
+from slopewalk.planner.zmp import cop_of_wrench, friction_ratio
 
 MAX_DEG = 59.0
 

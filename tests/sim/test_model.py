@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.sim.model import (
+from slopewalk.bench.sim.model import (
     SceneError,
     build_robot,
     robot_xml,
@@ -22,12 +22,17 @@ from bench.sim.model import (
     stance_rooted_xml,
     write_default_mjcf,
 )
-from planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
-from planner.kinematics import CHAIN_LINKS, Chain, gravity_in_slope, rotation_slope_to_world
-from planner.newton_euler import inverse_dynamics
-from planner.plan import plan_walk
-from planner.spec import LinkInertial
-from planner.trajectory import GaitParams
+from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
+from slopewalk.planner.kinematics import (
+    CHAIN_LINKS,
+    Chain,
+    gravity_in_slope,
+    rotation_slope_to_world,
+)
+from slopewalk.planner.newton_euler import inverse_dynamics
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.spec import LinkInertial
+from slopewalk.planner.trajectory import GaitParams
 
 MJCF_DIR = Path(__file__).resolve().parents[2] / "mjcf"
 SLOPES = (0.0, np.deg2rad(15.0))  # [rad]
@@ -105,8 +110,8 @@ def test_committed_mjcf_is_what_the_default_spec_generates(spec, tmp_path):
     for generated in (robot, scene):
         committed = MJCF_DIR / generated.name
         assert committed.read_text() == generated.read_text(), (
-            f"{committed} drifted from bench.sim.model; "
-            "run bench.sim.model.write_default_mjcf('mjcf')"
+            f"{committed} drifted from slopewalk.bench.sim.model; "
+            "run slopewalk.bench.sim.model.write_default_mjcf('mjcf')"
         )
         mujoco.MjModel.from_xml_path(str(committed))
     assert (MJCF_DIR / "biped.xml").read_text() == robot_xml(spec)

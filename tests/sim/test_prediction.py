@@ -1,9 +1,9 @@
 """The prediction of a trial: the servo that is played, the compliance-aware verdict, events."""
 
-from bench.sim.prediction import predict_trial
-from bench.sim.trial import TrialSpec, run_trial
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.prediction import predict_trial
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 def test_saturation_is_reported_and_its_consequence_decides(spec):

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from bench.sim.model import scene_xml
-from bench.sim.trial import TrialSpec, run_trial
-from planner.joints import SIDE_PREFIX
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
-from planner.zmp import signed_margin
+from slopewalk.bench.sim.model import scene_xml
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.joints import SIDE_PREFIX
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import signed_margin
 
 G = 9.81
 

@@ -5,11 +5,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bench.sim.playback import play
-from bench.sim.support import planned_contact, support_difference, touch_downs
-from bench.sim.trial import TrialSpec, run_trial
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.playback import play
+from slopewalk.bench.sim.support import planned_contact, support_difference, touch_downs
+from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

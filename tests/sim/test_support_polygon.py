@@ -16,11 +16,11 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy.spatial import ConvexHull
 
-from bench.sim.model import scene_xml
-from planner.joints import SIDE_PREFIX
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
-from planner.zmp import foot_corners, signed_margin, support_polygon
+from slopewalk.bench.sim.model import scene_xml
+from slopewalk.planner.joints import SIDE_PREFIX
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.zmp import foot_corners, signed_margin, support_polygon
 
 
 def _mjcf_sole_rectangle(spec) -> np.ndarray:

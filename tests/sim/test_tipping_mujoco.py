@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from planner.tipping import excursion_integral, landing_restitution
+from slopewalk.planner.tipping import excursion_integral, landing_restitution
 
 M, H, HALF = 0.8, 0.15, 0.05  # [kg], [m], [m]
 SPIN = 0.002  # [kg m²] about the CoM, both horizontal axes

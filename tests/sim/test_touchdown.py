@@ -1,17 +1,17 @@
-"""Touch-down on time: the legs shortened by the floor's sink (``bench.sim.touchdown``)."""
+"""Touch-down on time: the legs shortened by the floor's sink (``bench/sim/touchdown.py``)."""
 
 import mujoco
 import numpy as np
 import pytest
 
-from bench.sim.floor import SoftFloor, foot_deflection, foot_loads
-from bench.sim.model import scene_xml
-from bench.sim.support import planned_contact
-from bench.sim.touchdown import leg_offsets, leg_shortening
-from planner.joints import LEFT
-from planner.kinematics import Chain
-from planner.plan import plan_walk
-from planner.trajectory import GaitParams
+from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, foot_loads
+from slopewalk.bench.sim.model import scene_xml
+from slopewalk.bench.sim.support import planned_contact
+from slopewalk.bench.sim.touchdown import leg_offsets, leg_shortening
+from slopewalk.planner.joints import LEFT
+from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

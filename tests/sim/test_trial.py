@@ -9,14 +9,19 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from bench.sim.events import detect, verdict
-from bench.sim.playback import build_model, control_sequence, initial_state, recording_from_rollout
-from bench.sim.trial import NOT_PREDICTED, TrialSpec, run_trial
-from planner.kinematics import rotation_slope_to_world
-from planner.plan import plan_walk
-from planner.spec import default_spec_path
-from planner.trajectory import GaitParams
-from planner.verdict import TIP_ANGLE
+from slopewalk.bench.sim.events import detect, verdict
+from slopewalk.bench.sim.playback import (
+    build_model,
+    control_sequence,
+    initial_state,
+    recording_from_rollout,
+)
+from slopewalk.bench.sim.trial import NOT_PREDICTED, TrialSpec, run_trial
+from slopewalk.planner.kinematics import rotation_slope_to_world
+from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.spec import default_spec_path
+from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.verdict import TIP_ANGLE
 
 
 def test_slow_walk_on_flat_ground_tracks_the_analytic_zmp(spec):
@@ -126,7 +131,10 @@ def test_a_blow_up_is_reported_not_raised(spec, tmp_path, monkeypatch):
 
 def _cli(*args):
     return subprocess.run(
-        [sys.executable, "-m", "bench.cli", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "slopewalk.bench.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 
@@ -189,7 +197,7 @@ def test_trial_json_is_strict_and_says_why_a_value_is_missing(spec):
     """A trial lost during settling has no ZMP comparison: null in the JSON, and why."""
     import dataclasses
 
-    from bench.sim.events import Event
+    from slopewalk.bench.sim.events import Event
 
     result = run_trial(spec, TrialSpec(GaitParams.nominal(spec, 1.0, steps=1)))
     lost = dataclasses.replace(
