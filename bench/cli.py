@@ -367,7 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
         "envelope",
         "the best gait of every step time x slope cell, by the GA, walked in MuJoCo (resumable)",
         "For every cell of an envelope file (step time x slope x friction x robot; format in "
-        "bench/experiments/envelope_config.py), the GA finds the gait of largest minimum ZMP "
+        "bench/experiments/envelope/config.py), the GA finds the gait of largest minimum ZMP "
         "margin and the least-work gait whose margin is at least the required margin; each "
         "is re-planned at 1 ms and played in MuJoCo in every actuator mode. One row per cell "
         "and gait family goes to DIR/envelope.partial.csv as it ends, DIR/envelope.csv and "

@@ -21,7 +21,7 @@ from slopewalk.planner.errors import SlopewalkError
 
 def gait_from_args(args, spec):
     """GaitParams from parsed flags (degrees → radians here)."""
-    from slopewalk.planner.trajectory import GaitParams
+    from slopewalk.planner.gait import GaitParams
 
     overrides = {
         "slope": np.deg2rad(args.slope),
@@ -101,7 +101,8 @@ def mjcf(args) -> None:
 
 
 def trial(args) -> None:
-    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial_spec import TrialSpec
     from slopewalk.planner.plan import plan_walk
     from slopewalk.planner.spec import load_spec
 
@@ -142,7 +143,7 @@ def trial(args) -> None:
 def _recorder(flag: str):
     """``record_trial``, or one line saying why recordings are unavailable."""
     try:
-        from slopewalk.bench.report.recording import record_trial
+        from slopewalk.bench.sim.recording import record_trial
     except ImportError as err:
         raise SlopewalkError(f"{flag}: recordings are unavailable ({err})") from None
     return record_trial
@@ -159,14 +160,14 @@ def _distinct(outputs: dict) -> None:
 
 
 def optimize(args) -> None:
-    from slopewalk.bench.experiments.ga import GaSettings, pareto_figure
-    from slopewalk.bench.experiments.ga_case import (
+    from slopewalk.bench.experiments.ga.case import (
         optimize_case,
         pareto_csv,
         pareto_paths,
         pareto_title,
         summary_lines,
     )
+    from slopewalk.bench.experiments.ga.search import GaSettings, pareto_figure
     from slopewalk.planner.spec import load_spec
 
     outputs = [args.out, *(pareto_paths(args.out) if args.pareto else ())]
@@ -221,7 +222,7 @@ def fidelity(args) -> None:
 
 
 def cop_error(args) -> None:
-    from slopewalk.bench.report.cop_error import cop_error_report
+    from slopewalk.bench.experiments.cop_error.report import cop_error_report
     from slopewalk.planner.spec import load_spec
 
     check_output(args.out)
@@ -260,8 +261,8 @@ def compare(args) -> None:
 def sweep(args) -> None:
     from pathlib import Path
 
-    from slopewalk.bench.experiments.sweep import run_sweep
-    from slopewalk.bench.experiments.sweep_config import SweepError, load_sweep
+    from slopewalk.bench.experiments.sweep.config import SweepError, load_sweep
+    from slopewalk.bench.experiments.sweep.run import run_sweep
 
     config = load_sweep(args.config)  # the whole file is checked before anything runs
     out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
@@ -292,7 +293,7 @@ def _batch_start(args, default_out, error: type[SlopewalkError]):
 
     if args.record:
         try:
-            import slopewalk.bench.report.recording  # noqa: F401
+            import slopewalk.bench.sim.recording  # noqa: F401
         except ImportError as err:
             raise error(f"--record: recordings are unavailable ({err})") from None
     out = Path(args.out) if args.out is not None else default_out
@@ -304,8 +305,8 @@ def _batch_start(args, default_out, error: type[SlopewalkError]):
 def _batch_executor(args):
     """The Dask cluster of ``--cluster`` (None: local workers) for a resumable run;
     SIGINT or SIGTERM of the run exits with 128 + the signal, its message on stderr."""
-    from slopewalk.bench.experiments.batch import Stopped
-    from slopewalk.bench.experiments.sweep import open_cluster
+    from slopewalk.bench.batch.run import Stopped
+    from slopewalk.bench.experiments.sweep.run import open_cluster
 
     try:
         with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
@@ -318,8 +319,9 @@ def _batch_executor(args):
 def _write_claims(results, sweep_table, envelope_table) -> None:
     """Write the claims table, confusion table and figures into ``results`` from the
     sweep's table, with the envelope's claims when ``envelope_table`` is not None."""
-    from slopewalk.bench.experiments.sweep_table import read_table
+    from slopewalk.bench.experiments.claim_trials import claim_trials, play_ga_best
     from slopewalk.bench.report.claims import ga_claims, write_report
+    from slopewalk.bench.tables.table import read_table
     from slopewalk.planner.spec import load_spec
 
     spec = load_spec()
@@ -328,7 +330,8 @@ def _write_claims(results, sweep_table, envelope_table) -> None:
         results,
         read_table(sweep_table),
         spec,
-        ga_claims(results / "optimize", spec),
+        claim_trials(spec),
+        ga_claims(results / "optimize", spec, play_ga_best),
         envelope=envelope,
     )
     print("wrote " + ", ".join(str(p.name) for p in written))
@@ -336,8 +339,8 @@ def _write_claims(results, sweep_table, envelope_table) -> None:
 
 def controllers(args) -> None:
     from slopewalk.bench.controllers import SHIPPED, ControllerError, load_controller
-    from slopewalk.bench.experiments.controllers import compare_controllers, report
-    from slopewalk.bench.experiments.sweep_config import DEFAULT_SWEEP, load_sweep
+    from slopewalk.bench.experiments.controller_comparison import compare_controllers, report
+    from slopewalk.bench.experiments.sweep.config import DEFAULT_SWEEP, load_sweep
 
     check_output(args.out)
     names = tuple(args.controller or SHIPPED)
@@ -363,7 +366,7 @@ def controllers(args) -> None:
     )
     text = report(table, source=source, command=command)
     if envelope is not None:
-        from slopewalk.bench.experiments.envelope_controllers import (
+        from slopewalk.bench.experiments.envelope.controllers import (
             compare_envelope,
             envelope_report,
         )
@@ -382,11 +385,11 @@ def _envelope_gaits(args):
     """The ``--envelope`` file checked now; a callable that returns its gait jobs."""
     from pathlib import Path
 
-    from slopewalk.bench.experiments import envelope_controllers as ec
+    from slopewalk.bench.experiments.envelope import controllers as ec
 
     path, low = Path(args.envelope), args.min_step_time or 0.0
     if path.suffix == ".toml":
-        from slopewalk.bench.experiments.envelope_config import load_envelope
+        from slopewalk.bench.experiments.envelope.config import load_envelope
 
         config = load_envelope(path)
         return lambda: ec.config_jobs(config, workers=args.workers, min_step_time=low)
@@ -399,12 +402,13 @@ def _envelope_gaits(args):
 def envelope(args) -> None:
     from pathlib import Path
 
-    from slopewalk.bench.experiments.envelope import (
+    from slopewalk.bench.experiments.envelope.config import EnvelopeError, load_envelope
+    from slopewalk.bench.experiments.envelope.run import (
         run_convergence,
         run_envelope,
         write_convergence,
     )
-    from slopewalk.bench.experiments.envelope_config import EnvelopeError, load_envelope
+    from slopewalk.bench.report.envelope_claims import write_envelope_documents
 
     config = load_envelope(args.config)  # the whole file is checked before anything runs
     out, resume = _batch_start(args, Path.cwd() / "results" / "envelope", EnvelopeError)
@@ -422,6 +426,7 @@ def envelope(args) -> None:
         print("\n".join(summary.lines()))
         if summary.lost:
             raise EnvelopeError(f"{len(summary.lost)} cells lost with their workers; add --resume")
+        write_envelope_documents(summary.table, out, config.source)
         if args.convergence:
             check = run_convergence(
                 config, summary.table, out, workers=args.workers, executor=executor,

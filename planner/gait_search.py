@@ -15,7 +15,7 @@ paper family is the extended one at x[3:] = (0, the walk's L, its profile's w).
 Why two modules: ``planner`` imports numpy, scipy and numba only (DESIGN.md), so the problem
 *definition* lives here - the variables, their bounds derived from the spec's
 kinematics, the objective and constraint arrays and the paper's penalty - while
-the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/experiments/ga.py``.
+the pymoo *driver* (GA, NSGA-II, progress bar) lives in ``bench/experiments/ga/search.py``.
 Any other optimiser can solve a ``GaitProblem`` through ``measure`` and
 ``objectives`` without pymoo.
 
@@ -41,11 +41,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.ik import tilted_plane_height, two_link_ik
 from slopewalk.planner.joints import JOINT_KINDS, RIGHT, principal_angle
 from slopewalk.planner.plan import score
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import Curve, GaitParams, Timeline, blend
+from slopewalk.planner.trajectory import Curve, Timeline, blend
 
 VARIABLES = ("hip_height", "swing_lift", "tilt")
 EXTENDED = (*VARIABLES, "pelvis_offset", "step_length", "sway_share")

@@ -32,11 +32,12 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError, UnreachableError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, stance_swing_to_left_right
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel.run import kernel_walk
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.trajectory import Timeline
 
 
 @dataclass(frozen=True)

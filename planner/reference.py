@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.ik import tilted_plane_height, two_link_ik
 from slopewalk.planner.joints import RIGHT, principal_angle
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
-from slopewalk.planner.trajectory import Curve, GaitParams, Timeline, blend, footprint_y
+from slopewalk.planner.trajectory import Curve, Timeline, blend, footprint_y
 from slopewalk.planner.zmp import (
     cop_of_wrench,
     foot_corners,

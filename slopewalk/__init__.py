@@ -31,18 +31,18 @@ _API = {
     "SlopewalkError": "slopewalk.planner.errors",
     "RobotSpec": "slopewalk.planner.spec",
     "load_spec": "slopewalk.planner.spec",
-    "GaitParams": "slopewalk.planner.trajectory",
+    "GaitParams": "slopewalk.planner.gait",
     "Plan": "slopewalk.planner.plan",
     "plan_walk": "slopewalk.planner.plan",
     "evaluate": "slopewalk.planner.plan",
     "ACTUATOR_MODES": "slopewalk.bench.sim.model",
-    "TrialSpec": "slopewalk.bench.sim.trial",
+    "TrialSpec": "slopewalk.bench.sim.trial_spec",
     "TrialResult": "slopewalk.bench.sim.trial",
     "run_trial": "slopewalk.bench.sim.trial",
-    "load_sweep": "slopewalk.bench.experiments.sweep_config",
-    "run_sweep": "slopewalk.bench.experiments.sweep",
-    "load_envelope": "slopewalk.bench.experiments.envelope_config",
-    "run_envelope": "slopewalk.bench.experiments.envelope",
+    "load_sweep": "slopewalk.bench.experiments.sweep.config",
+    "run_sweep": "slopewalk.bench.experiments.sweep.run",
+    "load_envelope": "slopewalk.bench.experiments.envelope.config",
+    "run_envelope": "slopewalk.bench.experiments.envelope.run",
 }
 
 __all__ = [
@@ -64,16 +64,17 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from slopewalk.bench.experiments.envelope import run_envelope
-    from slopewalk.bench.experiments.envelope_config import load_envelope
-    from slopewalk.bench.experiments.sweep import run_sweep
-    from slopewalk.bench.experiments.sweep_config import load_sweep
+    from slopewalk.bench.experiments.envelope.config import load_envelope
+    from slopewalk.bench.experiments.envelope.run import run_envelope
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+    from slopewalk.bench.experiments.sweep.run import run_sweep
     from slopewalk.bench.sim.model import ACTUATOR_MODES
-    from slopewalk.bench.sim.trial import TrialResult, TrialSpec, run_trial
+    from slopewalk.bench.sim.trial import TrialResult, run_trial
+    from slopewalk.bench.sim.trial_spec import TrialSpec
     from slopewalk.planner.errors import SlopewalkError
+    from slopewalk.planner.gait import GaitParams
     from slopewalk.planner.plan import Plan, evaluate, plan_walk
     from slopewalk.planner.spec import RobotSpec, load_spec
-    from slopewalk.planner.trajectory import GaitParams
 
 
 def __getattr__(name: str) -> Any:

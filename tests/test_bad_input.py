@@ -408,7 +408,7 @@ def test_the_cli_offers_the_scenes_actuator_modes():
 
 def test_the_cli_allows_the_trials_command_noise():
     from slopewalk.bench import flags
-    from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE_DEG
+    from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE_DEG
 
     assert (flags.COMMAND_NOISE_DEG.low, flags.COMMAND_NOISE_DEG.high) == (0, MAX_COMMAND_NOISE_DEG)
 

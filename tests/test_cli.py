@@ -47,9 +47,9 @@ def test_plan_writes_the_series(tmp_path):
     assert meta["params"]["slope"] == pytest.approx(np.deg2rad(10))
     assert meta["spec"]["thigh"] == 0.111
     # the values are those of the plan the flags describe (degrees at the edge only)
+    from slopewalk.planner.gait import GaitParams
     from slopewalk.planner.plan import plan_walk
     from slopewalk.planner.spec import load_spec
-    from slopewalk.planner.trajectory import GaitParams
 
     spec = load_spec()
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from slopewalk.bench.experiments.sweep_config import (
+from slopewalk.bench.experiments.sweep.config import (
     DEFAULTS,
     MASS_GROUPS,
     TOP_KEYS,
@@ -88,7 +88,7 @@ ENVELOPE_DOC = ROOT / "docs" / "envelope-format.md"
 
 
 def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
-    from slopewalk.bench.experiments.envelope_config import (
+    from slopewalk.bench.experiments.envelope.config import (
         GRID_KEYS,
         SEARCH_DEFAULTS,
         SEARCH_KEYS,
@@ -110,8 +110,8 @@ def test_envelope_doc_has_every_key_with_the_codes_default(tmp_path):
 
 
 def test_envelope_doc_names_every_family_and_its_columns():
-    from slopewalk.bench.experiments.envelope_cell import FAMILIES
-    from slopewalk.bench.experiments.envelope_table import EXTENDED_COLUMNS
+    from slopewalk.bench.experiments.envelope.cell import FAMILIES
+    from slopewalk.bench.tables.envelope import EXTENDED_COLUMNS
 
     rows, text = _rows(ENVELOPE_DOC), ENVELOPE_DOC.read_text()
     for family in FAMILIES:

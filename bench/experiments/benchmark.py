@@ -42,11 +42,12 @@ import time
 
 import numpy as np
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kernel.run import kernel_walk
 from slopewalk.planner.plan import evaluate, plan_walk
 from slopewalk.planner.reference import evaluate_reference
 from slopewalk.planner.spec import load_spec
-from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.trajectory import Timeline
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 POPULATION = 130  # the paper's GA population
@@ -81,7 +82,7 @@ start = time.perf_counter()
 import numpy as np
 from slopewalk.planner.plan import evaluate, plan_walk
 from slopewalk.planner.spec import load_spec
-from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.gait import GaitParams
 spec = load_spec()
 imported = time.perf_counter()
 plan_walk(spec, GaitParams.nominal(spec, 1.0))
@@ -174,7 +175,8 @@ def sim_figures() -> dict:
     through ``mujoco.rollout`` on 2 threads.
     """
     from slopewalk.bench.sim.playback import play_many
-    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial_spec import TrialSpec
 
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
@@ -212,7 +214,7 @@ _GA_PROCESS = """
 import json, time
 start = time.perf_counter()
 import numpy as np
-from slopewalk.bench.experiments.ga import GaSettings, run_ga
+from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
 from slopewalk.planner.gait_search import GaitProblem, ga_params
 from slopewalk.planner.spec import load_spec
 spec = load_spec()
@@ -252,7 +254,7 @@ def ga_figures() -> dict:
     run bit for bit) in the same process, and ``batched_speedup`` its wall time over
     the batched run's.
     """
-    from slopewalk.bench.experiments.ga import GaSettings, run_ga
+    from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
     from slopewalk.planner.gait_search import GaitProblem, ga_params
 
     spec = load_spec()
@@ -311,8 +313,8 @@ def sweep_figures() -> dict:
     import tempfile
     from concurrent.futures import ProcessPoolExecutor
 
-    from slopewalk.bench.experiments.sweep import run_sweep
-    from slopewalk.bench.experiments.sweep_config import load_sweep
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+    from slopewalk.bench.experiments.sweep.run import run_sweep
 
     config = load_sweep()
     workers = os.cpu_count() or 1
@@ -358,7 +360,7 @@ def grid_figures() -> dict:
     import tracemalloc
     from pathlib import Path
 
-    from slopewalk.bench.experiments.sweep_config import sweep_from_dict
+    from slopewalk.bench.experiments.sweep.config import sweep_from_dict
 
     values = [0.4 + i / 100 for i in range(100)]
     data = {"steps": 1, "grid": {"step_time": values, "slope": values, "friction": values}}
@@ -397,7 +399,7 @@ def controller_figures() -> dict:
     from slopewalk.bench.sim.closed_loop import play_controller
     from slopewalk.bench.sim.env import open_loop
     from slopewalk.bench.sim.playback import play
-    from slopewalk.bench.sim.trial import TrialSpec
+    from slopewalk.bench.sim.trial_spec import TrialSpec
 
     spec = load_spec()
     name = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
@@ -434,6 +436,6 @@ def run(what: str) -> dict:
 
 
 def _envelope_figures() -> dict:
-    from slopewalk.bench.experiments.envelope_benchmark import envelope_figures
+    from slopewalk.bench.experiments.envelope.benchmark import envelope_figures
 
     return envelope_figures()

@@ -16,11 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.config_file import read_text
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 CASES = (  # (name, step time [s], slope [deg])

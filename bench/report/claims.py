@@ -1,33 +1,33 @@
 """The paper's claims, each checked analytically and in simulation; the confusion table.
 
-``write_report(out, rows, spec)`` turns a sweep's rows (``sweep.csv``) into
+``write_report(out, rows, spec, trials)`` turns a sweep's rows (``sweep.csv``) into
 ``claims.md``, ``confusion.md`` and the figures of ``figures.py``. Where a claim
-needs more than the sweep holds (a trace, a torque split, the GA cases) it
-plans or plays the few extra trials itself, or reads the GA results written by
-``slopewalk optimize`` into ``results/optimize/``.
+needs more than the sweep holds (a trace, a torque split, the GA cases) it plans
+(no simulation), takes the walks ``experiments.claim_trials`` played, or reads the GA
+results written by ``slopewalk optimize`` into ``results/optimize/``.
 
 Numbers are written at fixed precision (never ``%g`` of a computed value, whose
 digits follow floating-point noise: a ZMP shift of 1.39e-13 mm is 0.0000 mm), and
-the sweep's values come from ``sweep.csv`` as written (``sweep_table.py``), so a
+the sweep's values come from ``sweep.csv`` as written (``tables/sweep.py``), so a
 regenerated report has the same bytes when nothing changed.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from slopewalk.bench.files import atomic_path
 from slopewalk.bench.report import figures
 from slopewalk.bench.sim.model import servo_settings
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import signed_margin
 
 NOMINAL_STEP_TIME = 1.0  # [s]
@@ -229,10 +229,11 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x**2, axis=0)).mean())
 
 
-def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
+def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> list[dict]:
     """The GA's 22.5° and 30° cases, from ``slopewalk optimize`` reports in ``optimize_dir``.
 
-    Each best gait found is also played through the MuJoCo bench here.
+    ``simulate(report, spec)`` plays each report's best gait through the MuJoCo bench
+    (``experiments.claim_trials.play_ga_best``): (what it did, walked or None).
     """
     reports = []
     for path in sorted(Path(optimize_dir).glob("**/*.json")):
@@ -263,26 +264,12 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
             )
         ]
 
-    def simulate(report):
-        if not report["feasible"]:
-            return "no feasible gait to play", None
-        robot = spec.with_foot_length(report["foot_length_m"], extend="both")
-        robot = dataclasses.replace(robot, ankle_to_toe=report["ankle_to_toe_m"])
-        best = report["best"]
-        gait = GaitParams.nominal(
-            robot,
-            report["step_time_s"],
-            slope=np.deg2rad(report["slope_deg"]),
-            hip_height=best["hip_height_m"],
-            swing_lift=best["swing_lift_m"],
-            tilt=np.deg2rad(best["tilt_deg"]),
-        )
-        result = run_trial(robot, TrialSpec(gait))
-        text = (
-            f"{result.simulated_verdict} (ZMP RMS {result.zmp_rms * 1e3:.1f} mm, events: "
-            f"{', '.join(sorted({e.kind for e in result.events})) or 'none'})"
-        )
-        return text, result.simulated_verdict == "stable"
+    played: dict[int, tuple[str, bool | None]] = {}
+
+    def play(report):  # each report's gait is played once, however often it is cited
+        if id(report) not in played:
+            played[id(report)] = simulate(report, spec)
+        return played[id(report)]
 
     def describe(report):
         b = report["best"]
@@ -304,8 +291,8 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
                 "GA at 22.5°: θ1max = −9.18°, Hz = 0.151 m, Szmax = 0.013 m, ZMP inside",
                 "θ1max −9.18°, Hz 0.151 m, Szmax 0.013 m; ZMP inside",
                 describe(r),
-                simulate(r)[0],
-                _yes(r["feasible"], simulate(r)[1]),
+                play(r)[0],
+                _yes(r["feasible"], play(r)[1]),
                 _relative(path, optimize_dir),
             )
         )
@@ -339,10 +326,10 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec) -> list[dict]:
                 "30°: no feasible gait until the foot is lengthened by 0.01 m",
                 "best fitness stays at the penalty; feasible after +0.01 m of foot",
                 f"nominal foot: {describe(r)}; {found}",
-                simulate(first[2])[0] if first else "-",
+                play(first[2])[0] if first else "-",
                 _yes(
                     bool(not r["feasible"] and first and first[0] <= spec.foot_length + 0.0100001),
-                    simulate(first[2])[1] if first else None,
+                    play(first[2])[1] if first else None,
                 ),
                 _relative(first[1] if first else path, optimize_dir),
             )
@@ -435,12 +422,14 @@ def write_report(
     out: str | Path,
     rows: list[dict],
     spec: RobotSpec,
+    trials: Any,
     ga_claims: list[dict] | None = None,
     *,
     envelope: tuple[list[dict], Path] | None = None,
 ) -> list[Path]:
     """Write claims.md, confusion.md and the figures into ``out``; return the paths.
 
+    ``trials``: the walks the figures show (``experiments.claim_trials.claim_trials``).
     Rows of trials that raised (verdict ``error``) are left out. ``envelope``: the
     rows of an envelope table and its path as cited from ``out``; claims 1 and 2
     then come from it first (``envelope_claims``), the GA rows cite its cells, and
@@ -449,17 +438,8 @@ def write_report(
     out = Path(out)
     rows = [r for r in rows if "error" not in (r["analytic_verdict"], r["simulated_verdict"])]
     written = [figures.stability_map(rows, out / "stability_map.png")]
-    cases = []
-    for title, step_time, slope in (
-        ("flat, t_c = 0.5 s", 0.5, 0.0),
-        ("22.5°, t_c = 1 s", NOMINAL_STEP_TIME, 22.5),
-        ("flat, t_c = 2 s", 2.0, 0.0),
-    ):
-        plan = plan_walk(spec, GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope)))
-        cases.append((title, plan, run_trial(spec, TrialSpec(plan.params), plan=plan)))
-    written.append(figures.zmp_traces(cases, out / "zmp_traces.png"))
-    nominal = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
-    nominal_result = run_trial(spec, TrialSpec(nominal.params), plan=nominal)
+    written.append(figures.zmp_traces(trials.cases, out / "zmp_traces.png"))
+    nominal, nominal_result = trials.nominal, trials.nominal_result
     written.append(figures.joint_torques(nominal, nominal_result, out / "joint_torques.png"))
     written.append(figures.joint_angles(nominal, nominal_result, out / "joint_angles.png"))
     nominal_claims = [step_time_claim(rows), slope_claim(rows, spec)]

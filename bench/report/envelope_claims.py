@@ -2,7 +2,7 @@
 
 The sweep's claims are about one hand-picked gait; the paper's question is
 whether *a* gait with the ZMP inside exists at a step time and slope. The
-envelope (``envelope.csv``, rows as ``sweep_table.read_table`` reads them)
+envelope (``envelope.csv``, rows as ``tables.table.read_table`` reads them)
 answers it per cell: ``feasible`` (the GA's max-margin gait has its ZMP inside,
 joints within limits) and whether MuJoCo walks that gait (per actuator mode).
 Numbers at fixed precision, as in ``claims.py``.
@@ -10,8 +10,12 @@ Numbers at fixed precision, as in ``claims.py``.
 
 from __future__ import annotations
 
-from slopewalk.bench.experiments.envelope_cell import is_failure
+from pathlib import Path
+
+from slopewalk.bench.files import atomic_path
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.tables.envelope import is_failure
+from slopewalk.bench.tables.table import read_table
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 
@@ -257,3 +261,21 @@ def boundaries_markdown(rows, source: str) -> str:
         "*(grid edge)*: the boundary lies at or beyond the grid's last step time or slope.",
     ]
     return "\n".join(lines) + "\n"
+
+
+FIGURE_NAME = "envelope.png"
+BOUNDARIES_NAME = "boundaries.md"
+
+
+def write_envelope_documents(table: str | Path, out_dir: str | Path, source: str) -> list[Path]:
+    """``envelope.png`` and ``boundaries.md`` (per gait family: the fastest flat step time
+    and the steepest slopes at 1 s, inside the polygon and walked in MuJoCo) of a finished
+    envelope table, into ``out_dir``; each written whole."""
+    from slopewalk.bench.report.envelope_figure import write_figure
+
+    out_dir = Path(out_dir)
+    figure = write_figure(table, out_dir / FIGURE_NAME)
+    boundaries = out_dir / BOUNDARIES_NAME
+    with atomic_path(boundaries) as tmp:
+        tmp.write_text(boundaries_markdown(read_table(table), source))
+    return [figure, boundaries]

@@ -30,10 +30,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import TwoSlopeNorm  # noqa: E402
 
-from slopewalk.bench.experiments.envelope_cell import is_failure  # noqa: E402
-from slopewalk.bench.experiments.sweep_table import read_table  # noqa: E402
 from slopewalk.bench.files import atomic_path  # noqa: E402
 from slopewalk.bench.sim.model import ACTUATOR_MODES  # noqa: E402
+from slopewalk.bench.tables.envelope import is_failure  # noqa: E402
+from slopewalk.bench.tables.table import read_table  # noqa: E402
 
 CLIP_MM = 10.0
 _MODE_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00")  # Okabe-Ito

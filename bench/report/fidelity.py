@@ -1,6 +1,6 @@
 """Fidelity report: how often each analytic verdict agrees with MuJoCo, and why not.
 
-``fidelity_report(tables)`` turns sweep tables (``sweep_table.read_table`` rows)
+``fidelity_report(tables)`` turns sweep tables (``tables.table.read_table`` rows)
 into markdown: per table, the agreement of the paper's verdict (planned ZMP
 inside the polygon), the compliance-aware verdict and the predicted verdict
 (the most severe predicted event) with the simulated one, counting "walks"
@@ -287,7 +287,7 @@ def read_tables(paths: list[str | Path]) -> dict[str, list[dict]]:
     Raises:
         FidelityError: a missing or unreadable file, or one that is not a sweep table.
     """
-    from slopewalk.bench.experiments.sweep_table import read_table
+    from slopewalk.bench.tables.table import read_table
 
     tables = {}
     for path in paths:

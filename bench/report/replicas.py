@@ -1,6 +1,6 @@
 """Replicas: the same trials over several seeds of command noise, verdict by verdict.
 
-A sweep with ``command_noise`` and a list of seeds (``sweep_config``) plays every
+A sweep with ``command_noise`` and a list of seeds (``sweep/config.py``) plays every
 trial once per seed, each with its own white noise on the commands
 (``playback.noisy``), far below anything physical (1e-4° is 1.7 µrad, a thousandth
 of the loops' own lag). A trial whose simulated verdict differs between seeds was

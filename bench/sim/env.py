@@ -56,6 +56,7 @@ from slopewalk.bench.sim.playback import (
     initial_state,
     recording_from_rollout,
 )
+from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import Plan, plan_walk
@@ -94,10 +95,6 @@ class TrialEnv(dm_env.Environment):
         settle: float = SETTLE_TIME,
         hold: float = HOLD_TIME,
     ):
-        from slopewalk.bench.sim.trial import (
-            TrialSpec,  # trial.py runs controllers through this module
-        )
-
         spec = spec if spec is not None else load_spec()
         trial = trial if trial is not None else TrialSpec(_nominal(spec))
         self.trial, self.spec = trial, spec
@@ -232,6 +229,6 @@ class TrialEnv(dm_env.Environment):
 
 
 def _nominal(spec: RobotSpec):
-    from slopewalk.planner.trajectory import GaitParams
+    from slopewalk.planner.gait import GaitParams
 
     return GaitParams.nominal(spec, 1.0)

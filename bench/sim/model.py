@@ -31,11 +31,11 @@ import mujoco
 import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait import MAX_SLOPE, GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.ranges import FRICTION
 from slopewalk.planner.spec import JOINT_KINDS, RobotSpec, load_spec
-from slopewalk.planner.trajectory import MAX_SLOPE, GaitParams
 
 ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 _SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole

@@ -2,8 +2,8 @@
 
 from pathlib import Path
 
-from slopewalk.bench.experiments.controllers import OPEN_LOOP, compare_controllers, report
-from slopewalk.bench.experiments.sweep_config import sweep_from_dict
+from slopewalk.bench.experiments.controller_comparison import OPEN_LOOP, compare_controllers, report
+from slopewalk.bench.experiments.sweep.config import sweep_from_dict
 
 OPEN_LOOP_POLICY = "slopewalk.bench.sim.env:open_loop"
 

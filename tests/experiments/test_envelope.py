@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from slopewalk.bench.cli import main
-from slopewalk.bench.experiments.envelope import compare_budgets, convergence_cells
-from slopewalk.bench.experiments.envelope_cell import run_cell
-from slopewalk.bench.experiments.envelope_config import envelope_from_dict
-from slopewalk.bench.experiments.envelope_table import ENVELOPE
-from slopewalk.bench.experiments.sweep_table import read_table
+from slopewalk.bench.experiments.envelope.cell import run_cell
+from slopewalk.bench.experiments.envelope.config import envelope_from_dict
+from slopewalk.bench.experiments.envelope.run import compare_budgets, convergence_cells
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.tables.envelope import ENVELOPE
+from slopewalk.bench.tables.table import read_table
 from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
 
 TINY = """\
@@ -205,7 +205,7 @@ def test_convergence_counts_flips_and_the_largest_margin_change(tmp_path):
 
 def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
     """The GA's best may be reachable at its samples only; the next best that plans is taken."""
-    from slopewalk.bench.experiments.envelope_cell import _choose, _Pool
+    from slopewalk.bench.experiments.envelope.cell import _choose, _Pool
     from slopewalk.planner.errors import UnreachableError
     from slopewalk.planner.plan import plan_walk
 
@@ -228,7 +228,7 @@ def test_a_gait_that_overreaches_at_1_ms_is_passed_over(tmp_path):
 
 
 def test_rows_are_found_by_their_id_as_written(tmp_path):
-    from slopewalk.bench.experiments.envelope import _by_id
+    from slopewalk.bench.experiments.envelope.run import _by_id
 
     path = tmp_path / "e.csv"
     path.write_bytes(ENVELOPE.header + ENVELOPE.format_row({"cell_id": "123456789012"}))
@@ -238,7 +238,7 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
 def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
     """The plan as a controller (``slopewalk.bench.sim.env:open_loop``) walks as open loop does; the
     ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""
-    from slopewalk.bench.experiments.envelope_table import envelope_format, sim_columns
+    from slopewalk.bench.tables.envelope import envelope_format, sim_columns
 
     plan_policy = "slopewalk.bench.sim.env:open_loop"
     ankle = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from slopewalk.bench.cli import main
-from slopewalk.bench.experiments.envelope_config import (
+from slopewalk.bench.experiments.envelope.config import (
     DEFAULT_ENVELOPE,
     EnvelopeError,
     envelope_from_dict,

@@ -6,15 +6,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slopewalk.bench.experiments.envelope_cell import run_cell
-from slopewalk.bench.experiments.envelope_config import envelope_from_dict
-from slopewalk.bench.experiments.envelope_controllers import (
+from slopewalk.bench.experiments.envelope.cell import run_cell
+from slopewalk.bench.experiments.envelope.config import envelope_from_dict
+from slopewalk.bench.experiments.envelope.controllers import (
     EnvelopeTableError,
     compare_envelope,
     envelope_report,
     table_jobs,
 )
-from slopewalk.bench.experiments.envelope_table import ENVELOPE
+from slopewalk.bench.tables.envelope import ENVELOPE
 
 PLAN_POLICY = "slopewalk.bench.sim.env:open_loop"
 ANKLE = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"

@@ -10,7 +10,8 @@ import pytest
 from pymoo.algorithms.moo.nsga2 import NSGA2
 from pymoo.algorithms.soo.nonconvex.ga import GA
 
-from slopewalk.bench.experiments.ga import (
+from slopewalk.bench.experiments.ga.operators import ArrayGA
+from slopewalk.bench.experiments.ga.search import (
     GaSettings,
     _drive,
     _PymooProblem,
@@ -19,8 +20,8 @@ from slopewalk.bench.experiments.ga import (
     run_ga,
     run_nsga2,
 )
-from slopewalk.bench.experiments.ga_operators import ArrayGA
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.gait_search import (
     PENALTY,
     Bounds,
@@ -37,7 +38,7 @@ from slopewalk.planner.gait_search import (
 )
 from slopewalk.planner.joints import JOINT_KINDS
 from slopewalk.planner.plan import evaluate, plan_walk
-from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.trajectory import Timeline
 
 # ---------------------------------------------------------------- synthetic problem
 
@@ -306,7 +307,7 @@ class Terraces(Bowl):
 
 @pytest.mark.parametrize("constraint", ["penalty", "margin"])
 def test_array_operators_make_the_same_run_as_pymoo_s(constraint):
-    # ga_operators replaces pymoo's tournament, survival and duplicate test by array
+    # ga/operators.py replaces pymoo's tournament, survival and duplicate test by array
     # versions that must compare, eliminate and draw exactly as pymoo's do
     terraces = Terraces(r=0.1)
     settings = GaSettings(population=30, generations=40, seed=3, constraint=constraint)
@@ -440,7 +441,7 @@ def test_a_quiet_ga_makes_no_multiprocessing_lock(tmp_path):
         "made = []\n"
         "rt.register = lambda name, kind: made.append(kind)\n"
         "import numpy as np\n"
-        "from slopewalk.bench.experiments.ga import GaSettings, run_ga\n"
+        "from slopewalk.bench.experiments.ga.search import GaSettings, run_ga\n"
         "from slopewalk.planner.gait_search import GaitProblem, ga_params\n"
         "from slopewalk.planner.spec import load_spec\n"
         "spec = load_spec()\n"

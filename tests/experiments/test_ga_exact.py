@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slopewalk.bench.experiments.ga import GaSettings, run_ga
+from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.gait_search import GaitProblem, ga_params
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 RESULTS = Path(__file__).resolve().parents[2] / "results" / "optimize"
 

@@ -16,14 +16,13 @@ import pytest
 from conftest import session_pids
 
 from slopewalk.bench.cli import main
-from slopewalk.bench.experiments.sweep import SweepSummary, run_one, run_sweep
-from slopewalk.bench.experiments.sweep_config import (
+from slopewalk.bench.experiments.sweep.config import (
     SWEEPS_DIR,
-    SweepError,
     load_sweep,
     sweep_from_dict,
 )
-from slopewalk.bench.experiments.sweep_table import (
+from slopewalk.bench.experiments.sweep.run import SweepSummary, run_one, run_sweep
+from slopewalk.bench.tables.sweep import (
     COLUMNS,
     CONTROLLER_COLUMNS,
     CONTROLLER_HEADER,
@@ -32,6 +31,7 @@ from slopewalk.bench.experiments.sweep_table import (
     format_row,
     parse,
 )
+from slopewalk.bench.tables.table import TableError
 
 SMOKE = SWEEPS_DIR / "smoke.toml"
 SWEEP = [sys.executable, "-m", "slopewalk.bench.cli", "sweep"]
@@ -131,7 +131,7 @@ def test_a_failing_trial_is_an_error_row(tmp_path, short_robot):
 
 
 def test_recording_per_trial(tmp_path):
-    pytest.importorskip("slopewalk.bench.report.recording")
+    pytest.importorskip("slopewalk.bench.sim.recording")
     trial = load_sweep(SMOKE).trials[0]
     row = run_one(trial, str(tmp_path))
     assert row["error"] == ""
@@ -480,7 +480,7 @@ def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
         "1.0": {"none": "stable", policy: "stable"},
         "0.4": {"none": by_input["0.4"]["none"], policy: by_input["0.4"]["none"]},
     }
-    with pytest.raises(SweepError, match="columns are those of a sweep with a controller key"):
+    with pytest.raises(TableError, match="columns are those of a sweep with a controller key"):
         parse(data, tmp_path)  # an open-loop sweep will not resume into it
 
 
@@ -490,7 +490,7 @@ def test_a_closed_loop_sweep_has_a_controller_column(tmp_path):
 def test_a_noisy_sweep_writes_each_seed_and_its_noise(tmp_path):
     """Two seeds of 0.05° noise (large, to move every row's numbers): two rows per trial,
     the noise column last, and the seeds' walks differ; the table reads as a noisy one."""
-    from slopewalk.bench.experiments.sweep_table import NOISE_COLUMNS, sweep_format
+    from slopewalk.bench.tables.sweep import NOISE_COLUMNS, sweep_format
 
     config = tmp_path / "n.toml"
     config.write_text("seed = [0, 1]\ncommand_noise = 0.05\nsteps = 1\n[grid]\nstep_time = [1.0]\n")
@@ -501,5 +501,5 @@ def test_a_noisy_sweep_writes_each_seed_and_its_noise(tmp_path):
     assert [(r["seed"], r["command_noise_deg"]) for r in rows] == [("0", "0.05"), ("1", "0.05")]
     assert rows[0]["tracking_rms_deg"] != rows[1]["tracking_rms_deg"]
     assert len(sweep_format(NOISE_COLUMNS).read_rows(table)) == 2
-    with pytest.raises(SweepError, match="columns are those of a sweep with a command_noise key"):
+    with pytest.raises(TableError, match="columns are those of a sweep with a command_noise key"):
         sweep_format(COLUMNS).read_rows(table)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slopewalk.bench.experiments.sweep_config import (
+from slopewalk.bench.experiments.sweep.config import (
     DEFAULT_SWEEP,
     SWEEPS_DIR,
     TIMESTEP,
@@ -304,7 +304,7 @@ def test_command_noise_enters_the_id_the_table_and_the_trial_only_when_set():
 def test_the_checks_do_not_walk_the_seeds(monkeypatch):
     """The per-value checks build one trial per value of each other axis, however many seeds
     (a check per seed would cost ~1 ms each: minutes for a long replica list)."""
-    from slopewalk.bench.experiments.sweep_trials import SweepTrial
+    from slopewalk.bench.experiments.sweep.trials import SweepTrial
 
     calls = []
     original = SweepTrial.trial_spec

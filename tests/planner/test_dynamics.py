@@ -4,11 +4,12 @@ import numpy as np
 import pytest
 from conftest import away_from_phase_changes
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import inverse_dynamics
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.reference import solve_reference
-from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.trajectory import Timeline
 from slopewalk.planner.zmp import cop_of_wrench, zmp_multibody
 
 

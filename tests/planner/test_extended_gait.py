@@ -9,11 +9,12 @@ on the compiled plan (``plan_walk``) and on the numpy reference (``solve_referen
 import numpy as np
 import pytest
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import inverse_dynamics_poses
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.reference import solve_reference
-from slopewalk.planner.trajectory import GaitParams, Timeline, footprint_y
+from slopewalk.planner.trajectory import Timeline, footprint_y
 from slopewalk.planner.zmp import zmp_multibody
 
 SOURCES = ("kernel", "reference")

@@ -5,9 +5,9 @@ import math
 import pytest
 
 from slopewalk.planner.errors import GaitError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.ranges import Range
-from slopewalk.planner.trajectory import GaitParams
 
 NAN, INF = math.nan, math.inf
 

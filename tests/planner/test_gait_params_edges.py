@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from slopewalk.planner.errors import GaitError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import evaluate, plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.mark.parametrize(

@@ -10,13 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.gait_search import GaitProblem, ga_params, joint_gap
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel.run import kernel_walk
 from slopewalk.planner.kernel.tables import T0, T1, GaitTable, limit_samples
 from slopewalk.planner.plan import plan_walk, score
 from slopewalk.planner.reference import evaluate_reference, solve_reference
-from slopewalk.planner.trajectory import GaitParams, Timeline
+from slopewalk.planner.trajectory import Timeline
 
 ROOT = Path(__file__).resolve().parents[2]
 SLOPES_DEG = (-30.0, -12.0, 0.0, 17.5, 35.0)
@@ -248,7 +249,7 @@ def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path
     env.update(HOME=str(home), PYTHONPATH=str(install), PYTHONDONTWRITEBYTECODE="1")
     code = (
         "import slopewalk.planner.plan as p, slopewalk.planner.spec as s, "
-        "slopewalk.planner.trajectory as t;"
+        "slopewalk.planner.gait as t;"
         "spec = s.load_spec(); plan = p.plan_walk(spec, t.GaitParams.nominal(spec, 1.0));"
         f"assert p.__file__.startswith({str(install)!r}); print(plan.t.size)"
     )

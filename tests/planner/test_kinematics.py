@@ -5,9 +5,9 @@ import pytest
 from conftest import away_from_phase_changes
 
 from slopewalk.planner.errors import UnreachableError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import Chain, dh_transform, rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 def _rot(axis: str, angle: float) -> np.ndarray:

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import gravity_in_slope
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import zmp_lipm
 
 

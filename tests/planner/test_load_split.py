@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from mj_reference import StanceRootedInverse
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import LEFT, RIGHT
 from slopewalk.planner.kinematics import gravity_in_slope
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 CASES = [  # step time [s], slope [deg], tilt profile, steps
     (1.0, 10.0, "hold", 4),

@@ -14,10 +14,10 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from mj_reference import StanceRootedInverse
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import inverse_dynamics
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import cop_of_wrench
 
 # Random states: angles within the joints' reach, rates and accelerations of a fast walk.

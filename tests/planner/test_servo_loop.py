@@ -6,9 +6,9 @@ import pytest
 
 from slopewalk.planner.compliance import compliant_walk
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.servo_loop import linearised, servo_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,11 @@ hip (and so the CoM) advances L/2 per step; the walk starts and ends at rest.
 import numpy as np
 import pytest
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import LEFT, RIGHT
 from slopewalk.planner.kinematics import Chain
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams, Timeline, footprint_y
+from slopewalk.planner.trajectory import Timeline, footprint_y
 
 DEFAULT_STEPS = 4  # README: `--steps N`, CLI help "(4)"; docs/sweep-format.md: default 4
 DSP_SHARE, SSP_SHARE = 0.4, 0.6  # README: "each step is a DSP (40 %) then an SSP (60 %)"

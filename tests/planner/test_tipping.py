@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import gravity_in_slope
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.tipping import (
@@ -22,7 +23,6 @@ from slopewalk.planner.tipping import (
     rocking,
     support_lines,
 )
-from slopewalk.planner.trajectory import GaitParams
 
 
 def test_constant_push_integrates_to_a_parabola():

@@ -5,9 +5,9 @@ import tomllib
 import numpy as np
 import pytest
 
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import default_spec_path, spec_from_dict
-from slopewalk.planner.trajectory import GaitParams
 
 
 def _scaled_spec(factor: float):

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from slopewalk.planner.compliance import compliant_walk
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.tipping import excursion_integral
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.verdict import (
     SLIP_DISTANCE,
     PredictedEvent,

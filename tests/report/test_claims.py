@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 from mj_reference import StanceRootedInverse
 
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import gravity_in_slope
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import cop_of_wrench, signed_margin
 
 

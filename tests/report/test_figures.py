@@ -5,9 +5,10 @@ import pytest
 from matplotlib.colors import to_rgba
 
 from slopewalk.bench.report import figures
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture

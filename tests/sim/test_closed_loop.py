@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from slopewalk.bench.controllers import SHIPPED, ControllerError, load_controller
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
-from slopewalk.planner.trajectory import GaitParams
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 
 OPEN_LOOP = "slopewalk.bench.sim.env:open_loop"
 

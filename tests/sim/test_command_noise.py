@@ -5,9 +5,9 @@ import pytest
 
 from slopewalk.bench.sim.model import SceneError
 from slopewalk.bench.sim.playback import noisy, play
-from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE, TrialSpec
+from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE, TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 def test_noisy_adds_seeded_white_noise_of_sigma():

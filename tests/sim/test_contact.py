@@ -7,9 +7,9 @@ import pytest
 from slopewalk.bench.sim.contact import decode
 from slopewalk.bench.sim.events import SLIP_DISTANCE, detect, verdict
 from slopewalk.bench.sim.playback import build_model, initial_state, play
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 def _contact_force_path(model, data, R):

@@ -11,9 +11,9 @@ import pytest
 
 from slopewalk.bench.sim.contact import MAX_CONTACTS, NON_FOOT_BODIES, decode
 from slopewalk.bench.sim.playback import build_model
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture  # per test: mutmut maps a test to the code its fixtures run

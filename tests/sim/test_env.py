@@ -18,11 +18,11 @@ from mujoco import rollout
 
 from slopewalk.bench.sim.env import ActionError, TrialEnv, open_loop
 from slopewalk.bench.sim.playback import initial_state, play, recording_from_rollout
-from slopewalk.bench.sim.trial import TrialSpec
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import load_spec
-from slopewalk.planner.trajectory import GaitParams
 
 SENSOR_SERIES = ("q", "actuator_force", "foot_force", "foot_cop", "cop", "sole", "foot_normal")
 SENSOR_SERIES += ("pelvis_height", "pelvis_qpos", "touching")

@@ -6,10 +6,11 @@ import pytest
 
 from slopewalk.bench.sim.model import servo_settings
 from slopewalk.bench.sim.playback import build_model, control_sequence, feedforward_torque, play
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

@@ -19,10 +19,11 @@ from slopewalk.bench.sim.playback import (
     recording_from_rollout,
 )
 from slopewalk.bench.sim.support import touch_downs
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 STEP = 2.0  # [s] a slow walk: the give, not the dynamics, is what moves the CoP
 SETTLE = 0.5

@@ -22,6 +22,7 @@ from slopewalk.bench.sim.model import (
     stance_rooted_xml,
     write_default_mjcf,
 )
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
 from slopewalk.planner.kinematics import (
     CHAIN_LINKS,
@@ -32,7 +33,6 @@ from slopewalk.planner.kinematics import (
 from slopewalk.planner.newton_euler import inverse_dynamics
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import LinkInertial
-from slopewalk.planner.trajectory import GaitParams
 
 MJCF_DIR = Path(__file__).resolve().parents[2] / "mjcf"
 SLOPES = (0.0, np.deg2rad(15.0))  # [rad]

@@ -1,9 +1,10 @@
 """The prediction of a trial: the servo that is played, the compliance-aware verdict, events."""
 
 from slopewalk.bench.sim.prediction import predict_trial
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 def test_saturation_is_reported_and_its_consequence_decides(spec):

@@ -16,10 +16,11 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from slopewalk.bench.sim.model import scene_xml
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import SIDE_PREFIX
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import signed_margin
 
 G = 9.81

@@ -7,9 +7,10 @@ import pytest
 
 from slopewalk.bench.sim.playback import play
 from slopewalk.bench.sim.support import planned_contact, support_difference, touch_downs
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

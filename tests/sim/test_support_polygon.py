@@ -17,9 +17,9 @@ from hypothesis.extra import numpy as hnp
 from scipy.spatial import ConvexHull
 
 from slopewalk.bench.sim.model import scene_xml
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import SIDE_PREFIX
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.zmp import foot_corners, signed_margin, support_polygon
 
 

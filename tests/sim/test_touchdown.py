@@ -8,10 +8,10 @@ from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, foot_loads
 from slopewalk.bench.sim.model import scene_xml
 from slopewalk.bench.sim.support import planned_contact
 from slopewalk.bench.sim.touchdown import leg_offsets, leg_shortening
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import LEFT
 from slopewalk.planner.kinematics import Chain
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

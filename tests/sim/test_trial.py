@@ -16,11 +16,12 @@ from slopewalk.bench.sim.playback import (
     initial_state,
     recording_from_rollout,
 )
-from slopewalk.bench.sim.trial import NOT_PREDICTED, TrialSpec, run_trial
+from slopewalk.bench.sim.trial import NOT_PREDICTED, run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import default_spec_path
-from slopewalk.planner.trajectory import GaitParams
 from slopewalk.planner.verdict import TIP_ANGLE
 
 

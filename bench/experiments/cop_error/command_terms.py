@@ -18,13 +18,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from slopewalk.bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, run_case
+from slopewalk.bench.experiments.cop_error.flat_walk import FRICTION, STEP_TIME, STEPS, run_case
 from slopewalk.bench.sim.model import servo_settings
 from slopewalk.bench.sim.playback import LOOP_TERMS
 from slopewalk.bench.sim.support import touch_downs
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import Plan, plan_walk
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 
 # What ``stiff`` adds to the plan's angles, one term at a time: (terms of ``lead``, the
 # floor fed forward, label). The last rung is stiff_ff's command.

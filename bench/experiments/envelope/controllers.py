@@ -3,7 +3,7 @@
 The envelope's counterpart of ``controllers.py`` (which walks a sweep's trials).
 Its jobs are the gaits an envelope played: per cell, the max-margin gait when
 it plans at 1 ms and the min-work gait when one was found (``*_margin_1ms_mm``
-set, ``envelope_cell._choose``), each in the actuator modes played. They come
+set, ``envelope/cell.py``'s ``_choose``), each in the actuator modes played. They come
 either from a finished ``envelope.csv`` (``table_jobs``: its parameters,
 re-planned at 1 ms, no GA run again) or from an envelope file
 (``config_jobs``: every cell's GA run again, no MuJoCo). ``compare_envelope``
@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.controllers import map_local
-from slopewalk.bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
+from slopewalk.bench.experiments.controller_comparison import map_local
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.tables.envelope import GAITS, controller_tag, sim_columns
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.spec import RobotSpec
 
@@ -123,7 +123,7 @@ def table_jobs(path: str | Path, *, min_step_time: float = 0.0) -> list[GaitJob]
     """
     import csv
 
-    from slopewalk.bench.experiments.envelope_cell import is_failure
+    from slopewalk.bench.tables.envelope import is_failure
     from slopewalk.planner.spec import load_spec
 
     path = Path(path)
@@ -163,7 +163,8 @@ def table_jobs(path: str | Path, *, min_step_time: float = 0.0) -> list[GaitJob]
 def config_jobs(config, *, workers: int = 1, min_step_time: float = 0.0) -> list[GaitJob]:
     """The gaits of an envelope file's cells at step times ≥ ``min_step_time`` [s], each
     cell's GA run again (``run_cell_search``, no MuJoCo), walked in the file's modes."""
-    from slopewalk.bench.experiments.envelope_cell import is_failure, run_cell_search
+    from slopewalk.bench.experiments.envelope.cell import run_cell_search
+    from slopewalk.bench.tables.envelope import is_failure
 
     cells = [c for c in config.cells if c.step_time >= min_step_time]
     rows = map_local(run_cell_search, cells, workers)
@@ -179,10 +180,11 @@ def play_gait(job_and_controllers) -> dict:
     """{(mode, controller or None): simulated verdict} of one gait, re-planned at 1 ms."""
     import numba
 
-    from slopewalk.bench.experiments.sweep_trials import TIMESTEP
-    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.experiments.sweep.trials import TIMESTEP
+    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial_spec import TrialSpec
+    from slopewalk.planner.gait import GaitParams
     from slopewalk.planner.plan import plan_walk
-    from slopewalk.planner.trajectory import GaitParams
 
     job, controllers = job_and_controllers
     numba.set_num_threads(1)  # one per worker process

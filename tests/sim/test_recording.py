@@ -9,20 +9,21 @@ import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-import slopewalk.bench.report.recording
-from slopewalk.bench.report.recording import (
+import slopewalk.bench.sim.recording
+from slopewalk.bench.sim.playback import build_model, play
+from slopewalk.bench.sim.recording import (
     FORCE_SCALE,
     FRAME_RATE,
     LIFT,
     RecordingError,
     record_trial,
 )
-from slopewalk.bench.sim.playback import build_model, play
-from slopewalk.bench.sim.trial import TrialSpec, run_trial
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import MJCF_JOINTS
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 def simulate(spec, step_time: float, slope: float = 0.0):
@@ -228,7 +229,7 @@ def test_a_failure_mid_write_leaves_no_file(walk, tmp_path, monkeypatch):
     def boom(*args):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(slopewalk.bench.report.recording, "_log_plots", boom)
+    monkeypatch.setattr(slopewalk.bench.sim.recording, "_log_plots", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         record_trial(tmp_path / "new.rrd", plan, result)
     (tmp_path / "old.rrd").write_bytes(b"previous recording")

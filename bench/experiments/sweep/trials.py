@@ -4,7 +4,7 @@
 its ``trial_id`` is a stable hash of everything that decides its outcome.
 ``TrialSet`` is the de-duplicated union of a file's grids, counted without
 being listed and walked lazily, so a 10^6-trial grid costs no memory.
-``sweep_config.py`` reads and checks the file and builds these.
+``sweep/config.py`` reads and checks the file and builds these.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from functools import cached_property
 import numpy as np
 
 from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
-from slopewalk.bench.sim.trial import TrialSpec
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 
 TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk

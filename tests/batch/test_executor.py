@@ -13,7 +13,7 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from conftest import session_pids
 
-from slopewalk.bench.experiments.executor import (
+from slopewalk.bench.batch.executor import (
     FuturesPool,
     Interrupted,
     LocalPool,
@@ -115,7 +115,7 @@ def test_death_causes_read_as_words():
 
 ORPHAN_SCRIPT = """
 import time
-from slopewalk.bench.experiments.executor import LocalPool
+from slopewalk.bench.batch.executor import LocalPool
 
 def nap(seconds):
     time.sleep(seconds)

@@ -14,8 +14,15 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.ga import GaSettings, ParetoFront, RunResult, run_ga, run_nsga2
+from slopewalk.bench.experiments.ga.search import (
+    GaSettings,
+    ParetoFront,
+    RunResult,
+    run_ga,
+    run_nsga2,
+)
 from slopewalk.planner.errors import SlopewalkError, UnreachableError
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.gait_search import (
     MIN_CLEARANCE,
     PENALTY,
@@ -26,7 +33,6 @@ from slopewalk.planner.gait_search import (
 )
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 
 CHECK_DT = 1e-3  # [s] resolution at which the best gait is re-planned and checked
 

@@ -1,19 +1,20 @@
 """The envelope table's columns: one row per cell, a column group per gait and mode.
 
-``ENVELOPE`` is the ``sweep_table.TableFormat`` of ``envelope.csv``: the cell's
+``ENVELOPE`` is the ``table.TableFormat`` of ``envelope.csv``: the cell's
 inputs, then per gait (``GAITS``: max-margin, min-work) whether the GA found it,
 its margins (GA and 1 ms), work and parameters (``GAIT_COLUMNS``, the extended
 family's ``EXTENDED_COLUMNS`` after its tilt), then one verdict and ZMP RMS pair
 per gait and actuator mode of ``slopewalk.bench.sim.model.ACTUATOR_MODES`` (``sim_columns``),
 so a mode the bench gains joins the table by itself. With controllers,
 ``envelope_format(controllers)`` appends their pairs after every other column, so
-each open-loop column keeps its place. ``envelope_cell`` fills a row.
+each open-loop column keeps its place. ``envelope/cell.py`` fills a row.
 """
 
 from __future__ import annotations
 
-from slopewalk.bench.experiments.sweep_table import SIMULATED_VERDICTS, TableFormat
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
+from slopewalk.bench.tables.table import TableFormat
 
 GAITS = ("maxmargin", "minwork")
 GAIT_COLUMNS = ("found", "margin_mm", "margin_1ms_mm", "work_J", "hip_height_m",
@@ -114,3 +115,12 @@ def envelope_format(controllers: tuple[str, ...] = ()) -> TableFormat:
         ENVELOPE.verdicts | dict.fromkeys(verdicts, VERDICTS),
         siblings=((COLUMNS, "its columns are those of an envelope without a controller key"),),
     )
+
+
+REPLAN_NOTE = "not re-plannable:"  # the error of a gait passed over, not of a failed cell
+
+
+def is_failure(error) -> bool:
+    """Whether a row's ``error`` is a failed cell (not a recording or re-plan note)."""
+    text = str(error or "")
+    return bool(text) and not text.startswith(("recording failed", REPLAN_NOTE))

@@ -1,14 +1,14 @@
 """Run a sweep: every trial of a sweep file, in parallel, each row written as it finishes.
 
 The sweep-specific half; the generic half (the resumable table run shared with
-``slopewalk envelope``) is ``batch.py``, on top of ``executor.py`` (workers, one
+``slopewalk envelope``) is ``batch/run.py``, on top of ``batch/executor.py`` (workers, one
 job each at a time, worker deaths, signals) and ``progress.py``. Trials run as calls of
 the top-level ``run_one`` on local spawned workers (``LocalPool``) or on any
 ``concurrent.futures`` executor, e.g. a Dask ``distributed.Client``'s
 (``--cluster ADDRESS``, ``FuturesPool``).
 
 A run directory holds ``sweep.partial.csv`` while a run is going and
-``sweep.csv`` when it is done (``sweep_table.py``):
+``sweep.csv`` when it is done (``tables/sweep.py``):
 
 - A fresh run (``resume=False``, the default of ``slopewalk sweep``) plays
   every trial into a new ``sweep.partial.csv``; when all are done, their rows
@@ -45,10 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.batch import Batch, Stopped, duration, run_batch
-from slopewalk.bench.experiments.executor import one_line
-from slopewalk.bench.experiments.sweep_config import SweepConfig, SweepError, SweepTrial
-from slopewalk.bench.experiments.sweep_table import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
+from slopewalk.bench.batch.executor import one_line
+from slopewalk.bench.batch.run import Batch, Stopped, duration, run_batch
+from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepError, SweepTrial
+from slopewalk.bench.tables.sweep import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -107,7 +107,7 @@ __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep", "op
 
 
 def outcome_columns(result, plan) -> dict:
-    """The outcome columns of a row (``sweep_table.COLUMNS``) from a TrialResult and its Plan."""
+    """The outcome columns of a row (``tables.sweep.COLUMNS``) from a TrialResult and its Plan."""
     events = sorted(result.events, key=lambda e: e.time)
     return {
         "analytic_verdict": result.analytic_verdict,
@@ -142,7 +142,7 @@ def outcome_columns(result, plan) -> dict:
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
     """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place."""
-    from slopewalk.bench.report.recording import record_trial
+    from slopewalk.bench.sim.recording import record_trial
 
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"
@@ -283,7 +283,7 @@ def run_sweep(
         return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
     result = run_batch(
-        replace(  # a controller or command noise adds a column (sweep_table.py)
+        replace(  # a controller or command noise adds a column (tables/sweep.py)
             SWEEP_BATCH,
             source=config.source,
             fmt=SWEEP_CONTROLLER

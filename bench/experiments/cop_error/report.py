@@ -33,14 +33,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from slopewalk.bench.report.command_terms import friction_section, ladder_section
-from slopewalk.bench.report.flat_walk import FRICTION, STEP_TIME, STEPS, Case, run_case
-from slopewalk.bench.report.landing import landing_section
+from slopewalk.bench.experiments.cop_error.command_terms import friction_section, ladder_section
+from slopewalk.bench.experiments.cop_error.flat_walk import (
+    FRICTION,
+    STEP_TIME,
+    STEPS,
+    Case,
+    run_case,
+)
+from slopewalk.bench.experiments.cop_error.landing import landing_section
 from slopewalk.bench.sim.support import touch_downs
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import LEFT
 from slopewalk.planner.plan import Plan, plan_walk
 from slopewalk.planner.spec import RobotSpec
-from slopewalk.planner.trajectory import GaitParams
 
 WINDOW = 0.05  # [s] the transient after / before a phase change
 # (actuator mode, the floor fed forward (None: as the mode does), label); the floor's
@@ -133,7 +139,7 @@ def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
     lines += [
         f"Flat ground, {STEP_TIME:g} s steps, μ {FRICTION:g}, {STEPS} steps, 1 ms; the distance "
         "of `slopewalk trial` (simulated CoP vs analytic ZMP while the robot stands). "
-        "Module doc of `bench/report/cop_error.py` for each quantity.",
+        "Module doc of `bench/experiments/cop_error/report.py` for each quantity.",
         "",
         "| case | RMS [mm] | max [mm] | unplanned support [s] (touching / lifted) | first "
         "contact vs planned touch-down [ms] | normal velocity there [mm/s] | joint tracking [°] |",

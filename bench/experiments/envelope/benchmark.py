@@ -28,8 +28,8 @@ def _cpu_s() -> float:
 
 
 def envelope_figures() -> dict:
-    from slopewalk.bench.experiments.envelope import run_envelope
-    from slopewalk.bench.experiments.envelope_config import load_envelope
+    from slopewalk.bench.experiments.envelope.config import load_envelope
+    from slopewalk.bench.experiments.envelope.run import run_envelope
 
     config = load_envelope()
     workers = os.cpu_count() or 1

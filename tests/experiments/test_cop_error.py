@@ -3,8 +3,14 @@
 import numpy as np
 import pytest
 
-from slopewalk.bench.report.command_terms import LADDER
-from slopewalk.bench.report.cop_error import (
+from slopewalk.bench.experiments.cop_error.command_terms import LADDER
+from slopewalk.bench.experiments.cop_error.flat_walk import (
+    friction_sign,
+    lead_torque,
+    run_case,
+    simulate,
+)
+from slopewalk.bench.experiments.cop_error.report import (
     WINDOW,
     WINDOWS,
     by_window,
@@ -12,12 +18,11 @@ from slopewalk.bench.report.cop_error import (
     phase_windows,
     zmp_jumps,
 )
-from slopewalk.bench.report.flat_walk import friction_sign, lead_torque, run_case, simulate
 from slopewalk.bench.sim.model import servo_settings
 from slopewalk.bench.sim.support import touch_downs
+from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.trajectory import GaitParams
 
 
 @pytest.fixture(scope="module")

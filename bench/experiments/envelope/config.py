@@ -23,13 +23,13 @@ Format (degrees and millimetres at this edge, like the CLI)::
 
 ``controller`` names closed-loop controllers (``MODULE:CALLABLE``, as in a sweep
 file; ``"none"``, open loop, is always played): each played gait is also walked,
-in every mode, by each of them, into columns of their own (``envelope_cell``).
+in every mode, by each of them, into columns of their own (``envelope/cell.py``).
 A controller that does not import, or two whose callables share a name (they
 name the columns), is refused before any cell runs.
 
 Every key is checked: an unknown key, a value of the wrong type or out of its
 range is refused in one line naming the key, the value and the range (the
-sweep file's rules, ``sweep_config.py``, whose helpers this module uses).
+sweep file's rules, ``sweep/config.py``, whose helpers this module uses).
 """
 
 from __future__ import annotations
@@ -40,18 +40,18 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.envelope_cell import FAMILIES, EnvelopeCell, SearchSettings
-from slopewalk.bench.experiments.envelope_table import envelope_format
-from slopewalk.bench.experiments.sweep_config import SweepError, _body, _controller, _known, _number
+from slopewalk.bench.experiments.envelope.cell import FAMILIES, EnvelopeCell, SearchSettings
+from slopewalk.bench.experiments.sweep.config import SweepError, _body, _controller, _known, _number
 from slopewalk.bench.files import in_package
 from slopewalk.bench.flags import GENERATIONS, POPULATION, SEED
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.tables.envelope import envelope_format
 from slopewalk.planner import ranges
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SlopewalkError
-from slopewalk.planner.trajectory import GaitParams
+from slopewalk.planner.gait import GaitParams
 
-ENVELOPES_DIR = Path(__file__).parent / "envelopes"
+ENVELOPES_DIR = Path(__file__).parents[1] / "envelopes"  # bench/experiments/envelopes/
 DEFAULT_ENVELOPE = ENVELOPES_DIR / "paper.toml"
 TOP_KEYS = ("description", "steps", "grid", "search")
 GRID_KEYS = ("step_time", "slope", "friction", "robot", "actuators", "controller")

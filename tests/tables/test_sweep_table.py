@@ -4,15 +4,15 @@ import random
 
 import pytest
 
-from slopewalk.bench.experiments.sweep_config import SweepError
-from slopewalk.bench.experiments.sweep_table import (
+from slopewalk.bench.tables.sweep import (
     COLUMNS,
     DECIMALS,
     HEADER,
-    SweepTable,
+    SWEEP,
     format_row,
     text,
 )
+from slopewalk.bench.tables.table import AppendTable, TableError
 
 ID = "0123456789ab"
 
@@ -23,25 +23,25 @@ def _row(**values) -> dict:
 
 def test_table_appends_whole_rows_and_survives_a_torn_line(tmp_path):
     path = tmp_path / "sweep.partial.csv"
-    with SweepTable.open(path) as table:
+    with AppendTable.open(path, SWEEP) as table:
         assert table.rows == {} and table.created
         table.append(_row(friction=0.1 + 0.2, error='says "no", twice\nover lines'))
-    with SweepTable.open(path) as table:
+    with AppendTable.open(path, SWEEP) as table:
         assert not table.created and list(table.rows) == [ID]
         line = table.rows[ID]
     assert b"0.30000000000000004" in line  # an input keeps every digit
     assert b'"says ""no"", twice over lines"' in line
     with open(path, "ab") as f:  # a crash inside a write: the last line has no newline
         f.write(b"fedcba987654,0.5,0.0")
-    with SweepTable.open(path) as table:
+    with AppendTable.open(path, SWEEP) as table:
         assert list(table.rows) == [ID]
     assert path.read_bytes().endswith(line)
 
 
 def test_a_second_writer_is_refused(tmp_path):
     path = tmp_path / "sweep.partial.csv"
-    with SweepTable.open(path), pytest.raises(SweepError, match="another sweep"):
-        with SweepTable.open(path):
+    with AppendTable.open(path, SWEEP), pytest.raises(TableError, match="another sweep"):
+        with AppendTable.open(path, SWEEP):
             pass
 
 
@@ -88,7 +88,7 @@ def test_what_is_not_a_sweep_table_is_refused_and_left_alone(tmp_path, name):
     data, message = CORRUPT[name]
     path = tmp_path / "sweep.partial.csv"
     path.write_bytes(data)
-    with pytest.raises(SweepError) as err, SweepTable.open(path):
+    with pytest.raises(TableError) as err, AppendTable.open(path, SWEEP):
         pass
     assert str(path) in str(err.value) and message in str(err.value)
     assert "\n" not in str(err.value)

@@ -3,7 +3,7 @@
 What ``slopewalk sweep`` and ``slopewalk envelope`` share; each says only what
 its jobs are (``Batch``). The parallel half is ``executor.py`` (local spawned
 workers or any ``concurrent.futures`` executor, worker deaths, signals), the
-table half ``sweep_table.py`` (whole-line appends, a lock, a ``TableFormat``).
+table half ``tables/table.py`` (whole-line appends, a lock, a ``TableFormat``).
 
 A run directory holds ``<name>.partial.csv`` while a run is going and
 ``<name>.csv`` when it is done:
@@ -33,16 +33,15 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
-from slopewalk.bench.experiments.executor import (
+from slopewalk.bench.batch.executor import (
     FuturesPool,
     Interrupted,
     LocalPool,
     Lost,
     interruptible,
 )
-from slopewalk.bench.experiments.progress import Progress
-from slopewalk.bench.experiments.sweep_config import SweepError
-from slopewalk.bench.experiments.sweep_table import SweepTable, TableFormat
+from slopewalk.bench.batch.progress import Progress
+from slopewalk.bench.tables.table import AppendTable, TableError, TableFormat
 
 
 class Stopped(Interrupted):
@@ -129,7 +128,7 @@ def run_batch(
         after_row: (row, jobs left) -> text appended to progress log lines (an ETA).
 
     Raises:
-        SweepError: a table there is not of ``batch.fmt``, holds jobs not in
+        TableError: a table there is not of ``batch.fmt``, holds jobs not in
             ``jobs``, or is an unfinished run and ``resume`` is False.
         Stopped: SIGINT or SIGTERM; the rows written so far stay in the partial table.
     """
@@ -138,10 +137,10 @@ def run_batch(
     workers = workers or os.cpu_count() or 1
     # a table that is not ours is refused here; one of the previous version may be replaced
     finished = batch.fmt.read_rows(final, previous_ok=resume is not True) if final.exists() else {}
-    with interruptible(), SweepTable.open(partial, batch.fmt) as table:
+    with interruptible(), AppendTable.open(partial, batch.fmt) as table:
         try:
             if not table.created and resume is False:
-                raise SweepError(
+                raise TableError(
                     f"{out_dir} holds an unfinished {batch.name} ({len(table.rows)} "
                     f"{batch.unit} in {partial.name}): add --resume to finish it, or remove "
                     f"{partial} to start over"
@@ -234,7 +233,7 @@ def run_batch(
     )
 
 
-def _check_keys(table: SweepTable, jobs: Iterable, batch: Batch) -> None:
+def _check_keys(table: AppendTable, jobs: Iterable, batch: Batch) -> None:
     """Refuse a table with rows of jobs that are not in ``jobs`` (another run's)."""
     if not table.rows:
         return
@@ -243,7 +242,7 @@ def _check_keys(table: SweepTable, jobs: Iterable, batch: Batch) -> None:
         stray.discard(batch.key(job))
         if not stray:
             return
-    raise SweepError(
+    raise TableError(
         f"{table.path}: {len(stray)} rows (e.g. {batch.fmt.columns[0]} {min(stray)}) are not "
         f"{batch.unit} of {batch.source}: another {batch.name}'s table, or the {batch.name} file "
         "changed; use another --out"

@@ -30,7 +30,8 @@ from slopewalk.bench.sim.playback import (
     on_rows,
     recording_from_rollout,
 )
-from slopewalk.bench.sim.trial import TrialResult, TrialSpec, compare
+from slopewalk.bench.sim.trial import TrialResult, compare
+from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import Plan

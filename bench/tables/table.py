@@ -1,39 +1,28 @@
-"""The sweep table: one CSV line per finished trial, appended whole, so a killed sweep resumes.
+"""The append-only results table: one CSV line per finished row, appended whole, so a
+killed run resumes where it stopped.
 
-Two files in a run directory: ``sweep.partial.csv`` while a run is going (and
-after it was killed), ``sweep.csv`` once every trial is done. The partial table
+Two files in a run directory: ``<name>.partial.csv`` while a run is going (and
+after it was killed), ``<name>.csv`` once every row is done. The partial table
 is opened once with ``O_APPEND``; its header is written when it is created, and
 each row is formatted completely and written with a single ``os.write``, so a
 reader or a crash sees whole lines only (a kernel append is all-or-nothing for
 a small write). The one exception, a crash of the machine inside that write,
 can leave a last line without its newline; opening the partial table again
-cuts that torn line off, and its trial runs again. A row appended again for the
-same ``trial_id`` (a re-run for a missing recording) replaces the earlier one.
-An exclusive ``flock`` keeps a second sweep from writing the same file at the
-same time; it lives with this process's open file (sweep workers are spawned,
-so they hold no copy of it).
+cuts that torn line off, and its row runs again. A row appended again for the
+same id (a re-run for a missing recording) replaces the earlier one. An
+exclusive ``flock`` keeps a second run from writing the same file at the same
+time; it lives with this process's open file (workers are spawned, so they hold
+no copy of it).
 
 A file that is not such a table (binary, not UTF-8, no header, other columns,
 a line of the wrong width, a verdict that is not a verdict) is refused in one
 line naming the file and what is wrong; it is never truncated or overwritten.
-The one exception: a finished table of an older version (``PREVIOUS_LAYOUTS``:
-its columns had a ``wall_s``, or lacked the fidelity columns or the simulated
-tilt), which a fresh run replaces (``--resume`` refuses it).
+The one exception: a finished table of an older version (``previous_layouts``),
+which a fresh run replaces (``--resume`` refuses it).
 
-Values, chosen so that regenerating a table from the same trials gives the
-same bytes: the inputs (``step_time``, ``slope_deg``, ``friction``) as written
-in the sweep file (Python's shortest round-trip ``repr``); each outcome at a
-fixed precision well above floating-point noise (last-bit differences between
-BLAS builds or summation orders cannot reach it) and below anything physical:
-lengths in mm to 0.1 µm (4 decimals), times to 0.1 ms, angles to 1e-5 deg,
-torques to 1 µN·m, work to 0.1 µJ, ratios and fractions to 1e-6. ``nan`` is
-not-a-number, booleans are ``True``/``False``, a missing value an empty field;
-pandas and polars read the file as it is.
-
-The same machinery serves any table of this kind (the stability envelope's
-``envelope.csv``): a ``TableFormat`` names its columns, their precisions and
-the verdict columns with their allowed values; ``SWEEP`` and ``SWEEP_CONTROLLER``
-are the sweep's, and the module-level functions below are their methods.
+A ``TableFormat`` names a kind of table's columns, their precisions and its verdict
+columns with their allowed values: ``tables.sweep`` and ``tables.envelope`` hold the
+bench's. Values are written so that the same rows give the same bytes (``text``).
 """
 
 from __future__ import annotations
@@ -49,95 +38,14 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from slopewalk.bench.experiments.sweep_config import SweepError
 from slopewalk.bench.files import atomic_path
+from slopewalk.planner.errors import SlopewalkError
 
-COLUMNS = (
-    # inputs
-    "trial_id",
-    "step_time",  # [s]
-    "slope_deg",
-    "friction",
-    "actuators",
-    "robot",
-    "mass_scale",  # "none", "legs=2", "all=10;legs=2"
-    "steps",
-    "seed",
-    # outcome
-    "analytic_verdict",  # stable / zmp_outside, or error
-    "simulated_verdict",  # stable / tip / slip / fall / diverged, or error
-    "slip_predicted",
-    "events",  # kinds in order of first occurrence, ";"-joined
-    "first_event_time_s",
-    "zmp_rms_mm",
-    "zmp_max_mm",
-    "lipm_rms_mm",  # analytic multibody ZMP vs LIPM ZMP, RMS over the walk
-    "cop_lipm_rms_mm",  # simulated CoP vs LIPM ZMP, RMS while standing
-    "analytic_min_margin_mm",
-    "simulated_min_margin_mm",
-    "max_friction_ratio",
-    "simulated_max_friction_ratio",
-    "tracking_rms_deg",
-    "peak_torque_planned_Nm",
-    "peak_torque_simulated_Nm",
-    "work_J",  # planned joint work, Plan.work.sum()
-    "standing_fraction",
-    "sim_steps",
-    # fidelity (bench/sim/prediction.py, bench/sim/support.py)
-    "compliant_verdict",  # the paper's ZMP test on the walk the servos reach
-    "compliant_min_margin_mm",
-    "predicted_verdict",  # the most severe predicted event, or stable
-    "predicted_events",  # predicted kinds in order of first occurrence, ";"-joined
-    "predicted_rotation_deg",  # largest predicted turn of the support about its edge
-    "simulated_max_tilt_deg",  # largest simulated tilt of a loaded foot off the plane
-    "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
-    "error",  # the one-line message of a trial that raised or killed its worker, else empty
-)
-ANALYTIC_VERDICTS = ("stable", "zmp_outside", "error")
-SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
-DECIMALS = {  # outcome columns: digits after the point (module doc)
-    "first_event_time_s": 4,
-    "zmp_rms_mm": 4,
-    "zmp_max_mm": 4,
-    "lipm_rms_mm": 4,
-    "cop_lipm_rms_mm": 4,
-    "analytic_min_margin_mm": 4,
-    "simulated_min_margin_mm": 4,
-    "max_friction_ratio": 6,
-    "simulated_max_friction_ratio": 6,
-    "tracking_rms_deg": 5,
-    "peak_torque_planned_Nm": 6,
-    "peak_torque_simulated_Nm": 6,
-    "work_J": 7,
-    "standing_fraction": 6,
-    "compliant_min_margin_mm": 4,
-    "unplanned_support_s": 4,
-    "predicted_rotation_deg": 5,
-    "simulated_max_tilt_deg": 5,
-}
-HEADER = (",".join(COLUMNS) + "\n").encode()
-# A sweep that names a controller somewhere: one more input, last, so every other
-# column keeps its place ("none" for a trial played open loop).
-CONTROLLER_COLUMNS = (*COLUMNS, "controller")
-CONTROLLER_HEADER = (",".join(CONTROLLER_COLUMNS) + "\n").encode()
-# A sweep with command noise: its σ [deg], as written in the sweep file, last likewise
-NOISE_COLUMNS = (*COLUMNS, "command_noise_deg")
-_FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the older versions'
-# before fixed precision: a wall time, and no fidelity columns
-PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
-PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
-_BEFORE_TILT = tuple(c for c in COLUMNS if c != "simulated_max_tilt_deg")  # before 2026-12
-# every finished layout an older slopewalk wrote, which a fresh run may replace:
-# the one with a wall time, then fixed precision without the fidelity columns
-# (with and without the controller column)
-PREVIOUS_LAYOUTS = (
-    PREVIOUS_COLUMNS,
-    (*COLUMNS[:_FIDELITY], "error"),
-    (*COLUMNS[:_FIDELITY], "error", "controller"),
-    _BEFORE_TILT,
-    (*_BEFORE_TILT, "controller"),
-)
 _ID_CHARS = frozenset("0123456789abcdef")
+
+
+class TableError(SlopewalkError):
+    """A file that is not a table of its kind, a table another run holds, or a failed write."""
 
 
 @dataclass(frozen=True)
@@ -196,21 +104,21 @@ class TableFormat:
                 same way), which a fresh run may replace; its rows are not returned.
 
         Raises:
-            SweepError: ``data`` is not such a table (module doc), naming what is wrong.
+            TableError: ``data`` is not such a table (module doc), naming what is wrong.
         """
         where = f"{path}: not {self.article} table"
         hint = "; move it away or choose another --out"
         try:
             data.decode()
         except UnicodeDecodeError as err:
-            raise SweepError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
+            raise TableError(f"{where} (not UTF-8 text: byte {err.start}){hint}") from None
         expected = columns = self.columns
         previous = self._previous_layout(data)
         sibling = next((why for c, why in self.siblings if data.startswith(_header(c))), None)
         if previous_ok and previous:
             columns = previous
         elif sibling:
-            raise SweepError(f"{where} for this {self.kind} ({sibling}){hint}")
+            raise TableError(f"{where} for this {self.kind} ({sibling}){hint}")
         elif not data.startswith(self.header):
             first = data.split(b"\n", 1)[0]
             what = (
@@ -223,29 +131,29 @@ class TableFormat:
                 if first.startswith(f"{expected[0]},".encode())
                 else "its first line is not the header"
             )
-            raise SweepError(f"{where} ({what}){hint}")
+            raise TableError(f"{where} ({what}){hint}")
         whole = data.rfind(b"\n") + 1
         if whole < len(data) and not torn_ok:
-            raise SweepError(f"{where} (its last line has no newline: a torn write?){hint}")
+            raise TableError(f"{where} (its last line has no newline: a torn write?){hint}")
         rows: dict[str, bytes] = {}
         lines = data[data.index(b"\n") + 1 : whole].split(b"\n")[:-1]
         id_column = expected[0]
         for number, line in enumerate(lines, start=2):
             fields = next(csv.reader([line.decode()]), [])
             if len(fields) != len(columns):
-                raise SweepError(
+                raise TableError(
                     f"{path}: line {number} has {len(fields)} fields, not {len(columns)}"
                 )
             row = dict(zip(columns, fields, strict=True))
             row_id = row[id_column]
             if len(row_id) != 12 or not set(row_id) <= _ID_CHARS:
-                raise SweepError(
+                raise TableError(
                     f"{path}: line {number}: {id_column} {row_id!r} is not a "
                     f"{id_column.removesuffix('_id')} id"
                 )
             for column, allowed in self.verdicts.items():
                 if column in row and row[column] not in allowed:
-                    raise SweepError(
+                    raise TableError(
                         f"{path}: line {number}: {column} {row[column]!r} is not one of "
                         + ", ".join(allowed)
                     )
@@ -258,9 +166,9 @@ class TableFormat:
         try:
             data = path.read_bytes()
         except IsADirectoryError:
-            raise SweepError(f"{path}: is a directory, not {self.article} table") from None
+            raise TableError(f"{path}: is a directory, not {self.article} table") from None
         except OSError as err:
-            raise SweepError(f"{path}: cannot read ({err.strerror})") from None
+            raise TableError(f"{path}: cannot read ({err.strerror})") from None
         return self.parse(data, path, previous_ok=previous_ok)[0]
 
     def fields(self, line: bytes, *columns: str) -> tuple[str, ...]:
@@ -273,43 +181,7 @@ def _header(columns) -> bytes:
     return (",".join(columns) + "\n").encode()
 
 
-_SWEEP_VERDICTS = {"analytic_verdict": ANALYTIC_VERDICTS, "simulated_verdict": SIMULATED_VERDICTS}
-_LAYOUTS = {
-    COLUMNS: "a sweep without a controller or command_noise key",
-    CONTROLLER_COLUMNS: "a sweep with a controller key",
-    NOISE_COLUMNS: "a sweep with a command_noise key",
-}
-
-
-def _sweep_layout(columns: tuple[str, ...]) -> TableFormat:
-    others = tuple(
-        (other, f"its columns are those of {what}")
-        for other, what in _LAYOUTS.items()
-        if other != columns
-    )
-    return TableFormat("sweep", columns, DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS, others)
-
-
-SWEEP = _sweep_layout(COLUMNS)
-SWEEP_CONTROLLER = _sweep_layout(CONTROLLER_COLUMNS)
-SWEEP_NOISE = _sweep_layout(NOISE_COLUMNS)
-
-
-def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
-    """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS``, ``CONTROLLER_COLUMNS`` or
-    ``NOISE_COLUMNS``)."""
-    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE):
-        if tuple(columns) == fmt.columns:
-            return fmt
-    return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)
-
-
-def format_row(row: dict, columns: tuple[str, ...] = COLUMNS) -> bytes:
-    """One complete CSV line (newline included) of ``row``'s ``columns``."""
-    return sweep_format(columns).format_row(row)
-
-
-def text(column: str, value, decimals: dict = DECIMALS) -> str:
+def text(column: str, value, decimals: dict) -> str:
     """``value`` of ``column`` as written in the table (module doc); ``decimals`` by column."""
     if value is None:
         return ""
@@ -322,35 +194,10 @@ def text(column: str, value, decimals: dict = DECIMALS) -> str:
     return " ".join(str(value).split()) if isinstance(value, str) else str(value)
 
 
-def parse(
-    data: bytes,
-    path: Path,
-    *,
-    torn_ok: bool = False,
-    previous_ok: bool = False,
-    columns: tuple[str, ...] = COLUMNS,
-) -> tuple[dict[str, bytes], int]:
-    """The rows of a sweep table and the length of its whole lines (``TableFormat.parse``)."""
-    return sweep_format(columns).parse(data, path, torn_ok=torn_ok, previous_ok=previous_ok)
-
-
-def read_rows(
-    path: str | Path, *, previous_ok: bool = False, columns: tuple[str, ...] = COLUMNS
-) -> dict[str, bytes]:
-    """The rows of a finished sweep table (``parse``), by ``trial_id``."""
-    return sweep_format(columns).read_rows(path, previous_ok=previous_ok)
-
-
-def verdicts(line: bytes) -> tuple[str, str]:
-    """(analytic, simulated) verdict of one sweep table line."""
-    return SWEEP.fields(line, "analytic_verdict", "simulated_verdict")
-
-
-class SweepTable:
+class AppendTable:
     """An open partial table: the rows already there (by id) and an appender.
 
-    Use ``SweepTable.open(path)`` as a context manager; ``columns`` (the sweep's
-    ``COLUMNS`` or ``CONTROLLER_COLUMNS``) or a ``TableFormat`` for another kind.
+    Use ``AppendTable.open(path, fmt)`` as a context manager.
 
     Attributes:
         path: The file.
@@ -359,20 +206,21 @@ class SweepTable:
         rows: id -> the row's line (bytes, newline included).
     """
 
-    def __init__(self, path: Path, fd: int, rows: dict[str, bytes], created: bool, fmt=SWEEP):
+    def __init__(
+        self, path: Path, fd: int, rows: dict[str, bytes], created: bool, fmt: TableFormat
+    ):
         self.path, self._fd, self.rows, self.created = path, fd, rows, created
-        self.fmt = fmt if isinstance(fmt, TableFormat) else sweep_format(fmt)
+        self.fmt = fmt
         self.columns = self.fmt.columns
 
     @classmethod
     @contextlib.contextmanager
-    def open(cls, path: str | Path, columns: tuple[str, ...] | TableFormat = COLUMNS):
+    def open(cls, path: str | Path, fmt: TableFormat):
         """Create (with its header) or reopen the table at ``path``, locked for this process.
 
         Raises:
-            SweepError: another run holds the file, or it is not a table of this format.
+            TableError: another run holds the file, or it is not a table of this format.
         """
-        fmt = columns if isinstance(columns, TableFormat) else sweep_format(columns)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         fd = _locked(path, fmt.kind)
@@ -397,7 +245,7 @@ class SweepTable:
     def append_line(self, line: bytes) -> None:
         """Append one formatted line (``format_row``) whole."""
         if os.write(self._fd, line) != len(line):  # only on a full disk
-            raise SweepError(f"{self.path}: short write (disk full?)")
+            raise TableError(f"{self.path}: short write (disk full?)")
         self.rows[line.split(b",", 1)[0].decode()] = line
 
     def counts(self) -> Counter:
@@ -430,14 +278,14 @@ def _locked(path: Path, kind: str = "sweep") -> int:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             os.close(fd)
-            raise SweepError(f"{path}: another {kind} is writing this table") from None
+            raise TableError(f"{path}: another {kind} is writing this table") from None
         try:
             if os.stat(path).st_ino == os.fstat(fd).st_ino:
                 return fd
         except FileNotFoundError:
             pass
         os.close(fd)
-    raise SweepError(f"{path}: removed as it was opened, three times (another {kind} finishing?)")
+    raise TableError(f"{path}: removed as it was opened, three times (another {kind} finishing?)")
 
 
 def read_table(path: str | Path) -> list[dict]:

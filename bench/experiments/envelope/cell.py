@@ -31,7 +31,7 @@ comparison), into the columns ``<gait>_<mode>_<tag>_verdict`` and ``…_zmp_rms_
 ``<cell_id>_<tag>.rrd``, marked with the controller's name.
 
 ``run_cell`` runs in a worker and never raises: a failure is the cell's
-``error`` (verdicts ``error``). The table's columns are ``envelope_table.ENVELOPE``'s; one
+``error`` (verdicts ``error``). The table's columns are ``tables.envelope.ENVELOPE``'s; one
 verdict column pair per actuator mode of ``slopewalk.bench.sim.model.ACTUATOR_MODES``, so
 a mode the bench gains joins the table by itself; with controllers,
 ``envelope_format(controllers)`` appends theirs after every other column, so
@@ -48,9 +48,9 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.envelope_table import GAITS, controller_tag, sim_columns
-from slopewalk.bench.experiments.executor import one_line
-from slopewalk.bench.experiments.sweep_trials import TIMESTEP, spec_text
+from slopewalk.bench.batch.executor import one_line
+from slopewalk.bench.experiments.sweep.trials import TIMESTEP, spec_text
+from slopewalk.bench.tables.envelope import GAITS, REPLAN_NOTE, controller_tag, sim_columns
 from slopewalk.planner.spec import RobotSpec
 
 # (Hz, Szmax, θ1max) and (…, δ, L, w): planner/gait_search.py's FAMILIES
@@ -58,7 +58,6 @@ FAMILIES = ("paper", "extended")
 MAX_REPLANS = 256  # distinct candidates tried per gait when the best cannot be planned at 1 ms
 DENSE = 32  # of them, the best ones tried in order before the ranking is sampled
 AGREEMENT_TOL = 1e-6  # [m] a 1 ms plan's margin may not fall further below the GA's
-REPLAN_NOTE = "not re-plannable:"  # the error of a gait passed over, not of a failed cell
 
 
 @dataclass(frozen=True)
@@ -155,7 +154,7 @@ class EnvelopeCell:
     def gait(self, x):
         """The walk of GA variables ``x`` at 1 ms (``GaitParams``): (Hz, Szmax, tilt), and
         (δ, L, w) for the extended family."""
-        from slopewalk.planner.trajectory import GaitParams
+        from slopewalk.planner.gait import GaitParams
 
         extra = {}
         if len(x) == 6:
@@ -194,12 +193,6 @@ class _Shifted:
         return Measurement(m.work, m.margin - self.required, m.joint_gap)
 
 
-def is_failure(error) -> bool:
-    """Whether a row's ``error`` is a failed cell (not a recording or re-plan note)."""
-    text = str(error or "")
-    return bool(text) and not text.startswith(("recording failed", REPLAN_NOTE))
-
-
 def error_row(cell: EnvelopeCell, cause: str) -> dict:
     """The row of a cell that raised or killed its worker."""
     tags = ["", *(controller_tag(c) for c in cell.controllers)]
@@ -228,7 +221,7 @@ def run_cell_search(cell: EnvelopeCell, record_dir: str | None = None) -> dict:
 
 
 def _run(cell: EnvelopeCell, record_dir: str | None, simulate: bool) -> dict:
-    from slopewalk.bench.experiments.ga import GaSettings, run_ga
+    from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
 
     s = cell.search
     problem = cell.problem()
@@ -368,7 +361,8 @@ def _gait_columns(cell, gait: str, x, work: float, margin: float, found: bool) -
 def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
     """Play a 1 ms ``plan`` in every mode of the cell, open loop and with each of its
     controllers: their verdict and ZMP RMS columns."""
-    from slopewalk.bench.sim.trial import TrialSpec, run_trial
+    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial_spec import TrialSpec
 
     out = {}
     for i, mode in enumerate(cell.modes):
@@ -385,7 +379,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
             verdict, rms = sim_columns(gait, mode, tag)
             out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}
             if record_dir is not None and i == 0:
-                from slopewalk.bench.experiments.sweep import _record
+                from slopewalk.bench.experiments.sweep.run import _record
 
                 name = f"{cell.cell_id}_{tag}" if tag else cell.cell_id
                 try:

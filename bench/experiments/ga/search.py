@@ -25,7 +25,7 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
 * selection: binary tournament on (constraint violation, objective); survival:
   pymoo's (μ + λ) truncation of parents and children, which is stronger elitism
   than MATLAB's 5 % elite count. Duplicates are eliminated (and re-mated).
-  The GA runs as ``ga_operators.ArrayGA``: pymoo's GA on arrays, with pymoo's
+  The GA runs as ``ga/operators.py``'s ``ArrayGA``: pymoo's GA on arrays, with pymoo's
   operators and the same comparisons, without pymoo's per-individual Python, and
   with mating rounds sized for the expected share of duplicates (the same
   operators and the same rule for which children are kept, in fewer rounds;
@@ -49,7 +49,7 @@ from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
 from tqdm import tqdm
 
-from slopewalk.bench.experiments.ga_operators import ArrayDuplicates, ArrayGA
+from slopewalk.bench.experiments.ga.operators import ArrayDuplicates, ArrayGA
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
 
@@ -259,7 +259,7 @@ def run_ga(
         problem: A ``slopewalk.planner.gait_search.GaitProblem`` or anything with its interface.
         progress: Show a tqdm bar (one tick per generation) on stderr.
         batched: Size the mating rounds by the last round's share of unique children
-            (``ga_operators.ArrayGA``); False mates as pymoo does, bit for bit.
+            (``ga/operators.py``'s ``ArrayGA``); False mates as pymoo does, bit for bit.
     """
     pymoo_problem = _PymooProblem(problem, settings.constraint)
     ops = settings.operators()

@@ -1,12 +1,11 @@
 """Run a stability envelope: every cell of an envelope file in parallel, each row kept as it ends.
 
 The envelope's half; the resumable table run (lock, partial table, resume, worker
-deaths, signals, progress) is the sweep's, ``batch.py``. A run directory holds
+deaths, signals, progress) is the sweep's, ``batch/run.py``. A run directory holds
 ``envelope.partial.csv`` while a run is going and ``envelope.csv`` when it is
-done (columns: ``envelope_table.envelope_format(config.controllers)``), then
-``envelope.png`` and ``boundaries.md`` (per gait family: the fastest flat step time
-and the steepest slopes at 1 s, inside the polygon and walked in MuJoCo); with
-``record``, ``recordings/<cell_id>.rrd``.
+done (columns: ``tables.envelope.envelope_format(config.controllers)``); with
+``record``, ``recordings/<cell_id>.rrd``. ``slopewalk envelope`` then writes the
+table's documents (``report.envelope_claims.write_envelope_documents``).
 
 Convergence (``run_convergence``): a seeded 10 % of the cells is searched again
 with 4 × the generations (no MuJoCo: the question is the GA's), into
@@ -26,19 +25,16 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.batch import Batch, duration, run_batch
-from slopewalk.bench.experiments.envelope_cell import (
+from slopewalk.bench.batch.run import Batch, duration, run_batch
+from slopewalk.bench.experiments.envelope.cell import (
     error_row,
-    is_failure,
     run_cell,
     run_cell_search,
 )
-from slopewalk.bench.experiments.envelope_config import EnvelopeConfig
-from slopewalk.bench.experiments.envelope_table import envelope_format
+from slopewalk.bench.experiments.envelope.config import EnvelopeConfig
+from slopewalk.bench.tables.envelope import envelope_format, is_failure
 
 RECORDINGS_DIR = "recordings"
-FIGURE_NAME = "envelope.png"
-BOUNDARIES_NAME = "boundaries.md"
 CELL_S = 2.5  # [s] per cell and worker, the first estimate (GA 2 x 3000 evaluations + 4 trials)
 CONVERGENCE_SHARE = 0.10
 CONVERGENCE_FACTOR = 4
@@ -131,11 +127,11 @@ def run_envelope(
     record: bool = False,
     progress: bool = False,
     quiet: bool = False,
-    figure: bool = True,
 ) -> EnvelopeSummary:
-    """Run the cells of ``config`` into ``out_dir`` (module doc), then draw ``envelope.png``.
+    """Run the cells of ``config`` into ``out_dir`` (module doc).
 
-    Args: as ``sweep.run_sweep``; ``figure``: also write the figure when every cell is done.
+    Args: as ``sweep.run_sweep``. The documents of a finished table (``envelope.png``,
+    ``boundaries.md``) are ``report.envelope_claims.write_envelope_documents``'s.
 
     Raises:
         SweepError: a table there is not an envelope table, holds cells not in ``config``,
@@ -163,11 +159,6 @@ def run_envelope(
         intro=lambda done, w: _intro("envelope", len(cells), done, w, executor, CELL_S),
         after_row=_eta(start, len(cells)),
     )
-    if figure and not result.lost:
-        from slopewalk.bench.report.envelope_figure import write_figure
-
-        write_figure(result.table, out_dir / FIGURE_NAME)
-        write_boundaries(result.table, out_dir / BOUNDARIES_NAME, config.source)
     return EnvelopeSummary(
         table=result.table,
         total=len(cells),
@@ -203,18 +194,6 @@ def _eta(start: float, total: int):
         return f", about {duration(left / rate)} left"
 
     return after_row
-
-
-def write_boundaries(table, path, source: str) -> Path:
-    """``boundaries.md`` (``envelope_claims.boundaries_markdown``) from a finished table."""
-    from slopewalk.bench.experiments.sweep_table import read_table
-    from slopewalk.bench.files import atomic_path
-    from slopewalk.bench.report.envelope_claims import boundaries_markdown
-
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        tmp.write_text(boundaries_markdown(read_table(table), source))
-    return path
 
 
 # --- convergence -----------------------------------------------------------------------------
@@ -307,7 +286,7 @@ def run_convergence(
 def _by_id(path, fmt) -> dict[str, dict]:
     """The rows of a table (``read_table``: numbers as floats) by their id as written
     (an id of decimal digits only would read as a number)."""
-    from slopewalk.bench.experiments.sweep_table import read_table
+    from slopewalk.bench.tables.table import read_table
 
     ids = fmt.read_rows(path)
     return dict(zip(ids, read_table(path), strict=True))

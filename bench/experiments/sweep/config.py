@@ -38,13 +38,13 @@ gait inputs, μ, actuators, steps, seed, the simulation step and the *contents*
 of the (scaled) robot spec, not its path; editing a spec file gives new ids. A
 ``controller`` enters the hash only when one is set, so open-loop ids are the same
 with or without the key; a sweep that names a controller anywhere gets a
-``controller`` column in its table (``sweep_table.CONTROLLER_COLUMNS``).
+``controller`` column in its table (``tables.sweep.CONTROLLER_COLUMNS``).
 
 Command noise (``playback.noisy``) probes how much of a verdict the simulation's last
 bits decide: with ``command_noise`` > 0 every open-loop trial's commands get white
 noise of that σ, seeded by its ``trial_id``, so each seed of a list is a replica of
 the sweep. The noise enters the hash only when set, and such a sweep's table has a
-``command_noise_deg`` column (``sweep_table.NOISE_COLUMNS``); it is refused beside a
+``command_noise_deg`` column (``tables.sweep.NOISE_COLUMNS``); it is refused beside a
 controller (the closed loop's commands are its own).
 """
 
@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
-from slopewalk.bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
+from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
     AXES,
     TIMESTEP,
     Body,
@@ -65,12 +65,12 @@ from slopewalk.bench.experiments.sweep_trials import (  # noqa: F401 (TIMESTEP, 
     spec_text,
 )
 from slopewalk.bench.sim.model import ACTUATOR_MODES
-from slopewalk.bench.sim.trial import MAX_COMMAND_NOISE_DEG
+from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE_DEG
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.spec import LINK_NAMES, RobotSpec, load_spec
 
-SWEEPS_DIR = Path(__file__).parent / "sweeps"
+SWEEPS_DIR = Path(__file__).parents[1] / "sweeps"  # bench/experiments/sweeps/
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
 TOP_KEYS = ("description", "steps", "seed", "command_noise", "grid", "trial")
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")

@@ -1,0 +1,75 @@
+"""The trials the claims table needs (``report.claims``): it reads tables and writes
+documents; the walks its figures show and the GA's best gaits are played here.
+
+``claim_trials(spec)``: the nominal gait at 0.5 s and 2 s on flat ground and at 22.5°
+(ZMP traces) and at 1 s (joint torques and angles); ``play_ga_best(report, spec)``:
+the best gait of a ``slopewalk optimize`` report played through the bench.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from slopewalk.bench.sim.trial import TrialResult, TrialSpec, run_trial
+from slopewalk.planner.gait import GaitParams
+from slopewalk.planner.plan import Plan, plan_walk
+from slopewalk.planner.spec import RobotSpec
+
+NOMINAL_STEP_TIME = 1.0  # [s], the paper's step time for the slope claims
+ZMP_TRACE_CASES = (  # (title, step time [s], slope [deg])
+    ("flat, t_c = 0.5 s", 0.5, 0.0),
+    ("22.5°, t_c = 1 s", NOMINAL_STEP_TIME, 22.5),
+    ("flat, t_c = 2 s", 2.0, 0.0),
+)
+
+
+@dataclass(frozen=True)
+class ClaimTrials:
+    """The walks the claims' figures show.
+
+    Attributes:
+        cases: (title, plan, result) of each ``ZMP_TRACE_CASES`` walk.
+        nominal: The nominal gait at ``NOMINAL_STEP_TIME`` on flat ground.
+        nominal_result: ``nominal`` played in MuJoCo (stiff actuators).
+    """
+
+    cases: list[tuple[str, Plan, TrialResult]]
+    nominal: Plan
+    nominal_result: TrialResult
+
+
+def claim_trials(spec: RobotSpec) -> ClaimTrials:
+    """Plan and play the walks of ``ClaimTrials`` for ``spec`` (stiff actuators, μ = 1)."""
+    cases = []
+    for title, step_time, slope in ZMP_TRACE_CASES:
+        plan = plan_walk(spec, GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope)))
+        cases.append((title, plan, run_trial(spec, TrialSpec(plan.params), plan=plan)))
+    nominal = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
+    return ClaimTrials(cases, nominal, run_trial(spec, TrialSpec(nominal.params), plan=nominal))
+
+
+def play_ga_best(report: dict, spec: RobotSpec) -> tuple[str, bool | None]:
+    """Play the best gait of one ``slopewalk optimize`` report in MuJoCo (stiff actuators):
+    (what it did, in words; walked, or None when there is no feasible gait to play)."""
+    if not report["feasible"]:
+        return "no feasible gait to play", None
+    robot = spec.with_foot_length(report["foot_length_m"], extend="both")
+    robot = dataclasses.replace(robot, ankle_to_toe=report["ankle_to_toe_m"])
+    best = report["best"]
+    gait = GaitParams.nominal(
+        robot,
+        report["step_time_s"],
+        slope=np.deg2rad(report["slope_deg"]),
+        hip_height=best["hip_height_m"],
+        swing_lift=best["swing_lift_m"],
+        tilt=np.deg2rad(best["tilt_deg"]),
+    )
+    result = run_trial(robot, TrialSpec(gait))
+    text = (
+        f"{result.simulated_verdict} (ZMP RMS {result.zmp_rms * 1e3:.1f} mm, events: "
+        f"{', '.join(sorted({e.kind for e in result.events})) or 'none'})"
+    )
+    return text, result.simulated_verdict == "stable"
