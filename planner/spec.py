@@ -195,8 +195,9 @@ class RobotSpec:
             )
             factor = scale.get(name, group)
             MASS_SCALE.check(f"mass scale {name}", factor, SpecError)
+            ixx, iyy, izz = link.inertia
             links[name] = LinkInertial(
-                name, link.mass * factor, link.com, tuple(i * factor for i in link.inertia)
+                name, link.mass * factor, link.com, (ixx * factor, iyy * factor, izz * factor)
             )
         return _replace(self, links=links)
 
