@@ -151,7 +151,7 @@ def _recorder(flag: str):
 
 def _distinct(outputs: dict) -> None:
     """Two outputs may not be the same file (the second would overwrite the first)."""
-    seen = {}
+    seen: dict[str, str] = {}
     for flag, path in outputs.items():
         key = os.path.realpath(path)
         if key in seen:

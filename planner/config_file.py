@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
+from typing import Any
 
 from slopewalk.planner.errors import SlopewalkError
 
@@ -39,7 +40,7 @@ def read_text(path: Path, *, where: str, kind: str, error: type[SlopewalkError])
         ) from None
 
 
-def load_toml(path: Path, *, where: str, kind: str, error: type[SlopewalkError]) -> dict:
+def load_toml(path: Path, *, where: str, kind: str, error: type[SlopewalkError]) -> dict[str, Any]:
     """The TOML table in ``path``, or ``error`` in one line (see ``read_text``)."""
     text = read_text(path, where=where, kind=kind, error=error)
     try:

@@ -294,7 +294,8 @@ def swing_lift_bounds(
 def _shape_grid(tilt_range, shapes):
     """Every tilt of the grid with every (δ, L, w) row of ``shapes``: (tilts, (δ, L, w)),
     each flat of the same length; (tilts, ()) when ``shapes`` is None."""
-    tilts = np.linspace(*tilt_range, _TILT_GRID)
+    low, high = tilt_range
+    tilts = np.linspace(low, high, _TILT_GRID)
     if shapes is None:
         return tilts, ()
     shapes = np.atleast_2d(np.asarray(shapes, dtype=float))

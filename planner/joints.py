@@ -33,6 +33,7 @@ count a full turn of a joint as an excursion past its limit.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 JOINT_NAMES = (
     "stance_ankle_roll",
@@ -88,7 +89,7 @@ def stance_swing_to_left_right(q: np.ndarray, stance: np.ndarray) -> np.ndarray:
     return np.concatenate([left, right], axis=1)
 
 
-def principal_angle(q):
+def principal_angle(q: npt.ArrayLike) -> np.ndarray:
     """q wrapped to (−π, π] [rad] (same shape, values inside untouched); as the kernel does."""
     q = np.asarray(q, dtype=float)
     inside = (q > -np.pi) & (q <= np.pi)

@@ -15,8 +15,11 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from typing import TypeGuard, TypeVar
 
 from slopewalk.planner.errors import SlopewalkError
+
+_V = TypeVar("_V")
 
 
 @dataclass(frozen=True)
@@ -51,20 +54,20 @@ class Range:
     def _unit(self) -> str:
         return f" {self.unit}" if self.unit else ""
 
-    def contains(self, value) -> bool:
+    def contains(self, value: object) -> bool:
         """Whether ``value`` is a finite real number (an integer if required) inside."""
         if not _is_number(value):
             return False
         if self.integer and not isinstance(value, numbers.Integral):
             return False
-        value = float(value)
-        if not math.isfinite(value):
+        x = float(value)
+        if not math.isfinite(x):
             return False
-        above = value > self.low if self.low_open else value >= self.low
-        below = value < self.high if self.high_open else value <= self.high
+        above = x > self.low if self.low_open else x >= self.low
+        below = x < self.high if self.high_open else x <= self.high
         return above and below
 
-    def check(self, name: str, value, error: type[SlopewalkError] = SlopewalkError):
+    def check(self, name: str, value: _V, error: type[SlopewalkError] = SlopewalkError) -> _V:
         """Return ``value`` if inside, else raise ``error`` "<name> <value> <unit>: must ..."."""
         if not self.contains(value):
             unit = self._unit if _is_number(value) else ""
@@ -79,11 +82,11 @@ class Range:
         return f"must be an integer in {self}" if self.integer else f"must lie in {self}"
 
 
-def _is_number(value) -> bool:
+def _is_number(value: object) -> TypeGuard[numbers.Real]:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
-def show(value) -> str:
+def show(value: object) -> str:
     """A value as the user typed it (``inf``, ``nan``, ``100000.0``, ``'abc'``)."""
     if not _is_number(value):
         return repr(value)

@@ -184,7 +184,8 @@ def servo_walk(
     accel = np.zeros((n, dof))
     loop = np.zeros((n, dof))
     both = plan.double_support & closed_chain
-    jac = support_jacobian(plan)[:, HELD] if both.any() else None
+    # the held rows of the second sole's Jacobian, (n, 4, dof); read only where `both`
+    jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
     # start at rest in the static fixed point of the first sample (the robot has settled)
     k0 = gravity_k[0] + stiffness * eye
     f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -195,13 +196,14 @@ class RobotSpec:
             )
             factor = scale.get(name, group)
             MASS_SCALE.check(f"mass scale {name}", factor, SpecError)
+            ixx, iyy, izz = link.inertia
             links[name] = LinkInertial(
-                name, link.mass * factor, link.com, tuple(i * factor for i in link.inertia)
+                name, link.mass * factor, link.com, (ixx * factor, iyy * factor, izz * factor)
             )
         return _replace(self, links=links)
 
 
-def _replace(spec: RobotSpec, **changes) -> RobotSpec:
+def _replace(spec: RobotSpec, **changes: Any) -> RobotSpec:
     from dataclasses import replace
 
     return replace(spec, **changes)
@@ -227,7 +229,7 @@ def load_spec(path: str | Path | None = None) -> RobotSpec:
     return spec_from_dict(data, source=str(path))
 
 
-def spec_from_dict(data: dict, *, source: str = "<dict>") -> RobotSpec:
+def spec_from_dict(data: dict[str, Any], *, source: str = "<dict>") -> RobotSpec:
     """Build a RobotSpec from the parsed TOML tables (see ``load_spec``)."""
     try:
         return _spec_from_dict(data, source)
@@ -239,7 +241,7 @@ TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo")
 LINK_KEYS = ("mass", "com", "inertia")
 
 
-def _spec_from_dict(data: dict, source: str) -> RobotSpec:
+def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     _known(data, TOP_KEYS, "")
     geometry = _table(data, "geometry")
     links_table = _table(data, "links")
@@ -249,7 +251,7 @@ def _spec_from_dict(data: dict, source: str) -> RobotSpec:
     _known(links_table, LINK_NAMES, "links.")
     _known(limits, JOINT_KINDS, "joint_limits.")
     _known(servo, tuple(SERVO), "servo.")
-    links = {}
+    links: dict[str, LinkInertial] = {}
     for name in LINK_NAMES:
         link = _table(links_table, name, prefix="links.")
         _known(link, LINK_KEYS, f"links.{name}.")
@@ -269,7 +271,7 @@ def _spec_from_dict(data: dict, source: str) -> RobotSpec:
     )
 
 
-def _known(table: dict, allowed: tuple[str, ...], prefix: str) -> None:
+def _known(table: dict[str, Any], allowed: tuple[str, ...], prefix: str) -> None:
     """Refuse a key the format does not have, suggesting the nearest known one."""
     for key in table:
         if key not in allowed:
@@ -278,7 +280,7 @@ def _known(table: dict, allowed: tuple[str, ...], prefix: str) -> None:
             raise SpecError(f"unknown key {prefix}{key} ({hint}known: {', '.join(allowed)})")
 
 
-def _table(data: dict, key: str, prefix: str = "") -> dict:
+def _table(data: dict[str, Any], key: str, prefix: str = "") -> dict[str, Any]:
     value = data.get(key)
     if value is None:
         raise SpecError(f"missing table [{prefix}{key}]")
@@ -287,18 +289,22 @@ def _table(data: dict, key: str, prefix: str = "") -> dict:
     return value
 
 
-def _number(table: dict, key: str, where: str):
+# A TOML value is Any until the dataclass it fills checks it: a number becomes a float, any
+# other value stays as it is, for the range check to refuse with its own words.
+
+
+def _number(table: dict[str, Any], key: str, where: str) -> Any:
     """The value of a number key as a float; a non-number stays as it is for the range check."""
     if key not in table:
         raise SpecError(f"missing key {where}.{key}")
     return _float(table[key])
 
 
-def _float(value):
+def _float(value: Any) -> Any:
     return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else value
 
 
-def _vector(table: dict, key: str, where: str, size: int = 3) -> tuple:
+def _vector(table: dict[str, Any], key: str, where: str, size: int = 3) -> tuple[Any, ...]:
     if key not in table:
         raise SpecError(f"missing key {where}.{key}")
     value = table[key]
@@ -307,7 +313,7 @@ def _vector(table: dict, key: str, where: str, size: int = 3) -> tuple:
     return tuple(_float(v) for v in value)
 
 
-def _check_vector3(name: str, value, allowed: Range) -> None:
+def _check_vector3(name: str, value: object, allowed: Range) -> None:
     if not (isinstance(value, tuple | list) and len(value) == 3):
         raise SpecError(f"{name} {value!r}: must be 3 numbers")
     for v in value:

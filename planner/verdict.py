@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
@@ -280,6 +281,10 @@ def predict(
     slips, slide = slip_events(made, friction)
     events += tips + slips
     if walk is not None:
+        if stiffness is None:
+            raise SlopewalkError(
+                "predict: a walk needs the stiffness (kp [N m/rad]) it was made with"
+            )
         if not walk.converged:
             events.append(
                 PredictedEvent(

@@ -49,6 +49,7 @@ from concurrent.futures import FIRST_COMPLETED, Executor
 from concurrent.futures import wait as wait_futures
 from dataclasses import dataclass
 from multiprocessing.connection import wait as wait_ready
+from typing import Any
 
 from slopewalk.planner.errors import SlopewalkError
 
@@ -94,7 +95,7 @@ def one_line(err: BaseException) -> str:
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
-_stop = {"defer": 0, "pending": None}  # see _deferred_stop
+_stop: dict[str, Any] = {"defer": 0, "pending": None}  # see _deferred_stop
 
 
 @contextlib.contextmanager

@@ -32,6 +32,7 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 from slopewalk.bench.batch.executor import (
     FuturesPool,
@@ -154,7 +155,7 @@ def run_batch(
                 os.remove(partial)
             raise
         done = sum(record_dir is None or (record_dir / f"{k}.rrd").exists() for k in table.rows)
-        todo = (
+        todo: Iterable = (
             j
             for j in jobs
             if batch.key(j) not in table.rows
@@ -178,7 +179,8 @@ def run_batch(
             else FuturesPool(batch.fn, executor, window=4 * workers)
         )
         ran = errors = 0
-        lost, rows = [], []
+        lost: list[str] = []
+        rows: list[dict] = []
         try:
             with pool:
                 for key, outcome in pool.run(pairs()):
@@ -187,9 +189,11 @@ def run_batch(
                         lost.append(f"{batch.label(job)}: {outcome.cause}")
                         bar.update(f"{batch.label(job)}: lost")
                         continue
-                    row = outcome
-                    if isinstance(outcome, Lost):
-                        row = batch.error_row(job, outcome.cause)
+                    row: dict = (
+                        batch.error_row(job, outcome.cause)
+                        if isinstance(outcome, Lost)
+                        else cast(dict, outcome)  # a job's row; a Lost is handled above
+                    )
                     table.append(row)
                     rows.append(row)
                     ran += 1

@@ -175,5 +175,7 @@ def decode(model: mujoco.MjModel, sensordata: np.ndarray, rotation_slope_to_worl
         foot_normal=np.stack([block(f"{p}foot_zaxis") for p in SIDE_PREFIX], axis=1) @ R,
         pelvis_height=block("pelvis_pos") @ R[:, 2],
         pelvis_qpos=np.column_stack([block("pelvis_pos"), block("pelvis_quat")]),
-        touching=np.column_stack([block(f"{b}_touch") for b in NON_FOOT_BODIES]).any(axis=1),
+        touching=np.asarray(
+            np.column_stack([block(f"{b}_touch") for b in NON_FOOT_BODIES]).any(axis=1)
+        ),
     )

@@ -115,7 +115,8 @@ class SoftFloor:
         ``solref`` and ``solimp``: MuJoCo mixes the two geoms' values; equal, they are these)."""
         geom = model.geom(FOOT_GEOMS[0])
         timeconst, dampratio = (float(v) for v in model.geom_solref[geom.id])
-        solimp = tuple(float(v) for v in model.geom_solimp[geom.id][:5])
+        d0, d_max, width, midpoint, power = (float(v) for v in model.geom_solimp[geom.id][:5])
+        solimp = (d0, d_max, width, midpoint, power)
         inverse_mass = float(model.body_invweight0[model.geom_bodyid[geom.id], 0])
         return cls(timeconst, dampratio, solimp, inverse_mass)
 

@@ -278,7 +278,7 @@ def play_many(
         rows = _rows(plan, timestep, settle, hold).size
         key = (id(plan.spec), plan.params.slope, friction[i], actuators[i], rows)
         groups.setdefault(key, []).append(i)
-    out: list[Recording | None] = [None] * len(plans)
+    out: dict[int, Recording] = {}
     for (_, _, mu, mode, _), members in groups.items():
         first = plans[members[0]]
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
@@ -307,7 +307,7 @@ def play_many(
                 limit,
                 aim_offset=aims[row],
             )
-    return out
+    return [out[i] for i in range(len(plans))]
 
 
 def recording_from_rollout(

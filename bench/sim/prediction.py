@@ -23,8 +23,10 @@ the tipping predictor the floor's give.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypedDict
 
 import mujoco
+import numpy as np
 
 from slopewalk.bench.sim.floor import scene_corner_stiffness
 from slopewalk.bench.sim.model import scene_xml, servo_settings
@@ -59,10 +61,20 @@ class TrialPrediction:
         return self.prediction.verdict
 
 
+class _Loop(TypedDict):
+    """The servo loop's settings, as ``compliant_walk`` and ``servo_walk`` take them."""
+
+    stiffness: float
+    velocity_gain: float
+    damping: float
+    armature: float
+    feedforward: np.ndarray | None
+
+
 def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPrediction:
     """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ."""
     servo = servo_settings(plan.spec, actuators)
-    loop = dict(
+    loop = _Loop(
         stiffness=servo.kp,
         velocity_gain=servo.kv,
         damping=servo.damping,

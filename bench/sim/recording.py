@@ -28,6 +28,7 @@ every sample of the series. Points on the plane are ``p_W = R_WS [x, y, 0]``.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -159,10 +160,11 @@ def _log_robot(rec: rr.RecordingStream, model, qpos: np.ndarray, t: np.ndarray) 
 def _geoms(model, body: int) -> list:
     """Archetypes drawing the box, capsule and sphere geoms of ``body`` in its frame."""
     ids = np.flatnonzero(model.geom_bodyid == body)
-    kinds = {}
-    for g in ids:
-        kinds.setdefault(int(model.geom_type[g]), []).append(g)
-    out, solid = [], rr.components.FillMode.Solid
+    kinds: dict[int, list[Any]] = {}
+    for geom in ids:
+        kinds.setdefault(int(model.geom_type[geom]), []).append(geom)
+    out: list[rr.AsComponents] = []
+    solid = rr.components.FillMode.Solid
     G = mujoco.mjtGeom
     for kind, g in kinds.items():
         size, pos, quat = model.geom_size[g], model.geom_pos[g], model.geom_quat[g]

@@ -91,7 +91,7 @@ def touch_downs(plan: Plan, recording: Recording) -> tuple[np.ndarray, np.ndarra
     for k in range(params.steps):
         lift_off = k * params.step_time + dsp
         mid_swing = lift_off + params.ssp_fraction * params.step_time / 2
-        stance = plan.stance[min(np.searchsorted(plan.t, mid_swing), plan.t.size - 1)]
+        stance = plan.stance[min(int(np.searchsorted(plan.t, mid_swing)), plan.t.size - 1)]
         swing = 1 if stance == LEFT else 0
         air = np.flatnonzero((t >= lift_off) & ~load[:, swing])
         if not air.size:

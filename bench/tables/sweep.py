@@ -173,4 +173,5 @@ def read_rows(
 
 def verdicts(line: bytes) -> tuple[str, str]:
     """(analytic, simulated) verdict of one sweep table line."""
-    return SWEEP.fields(line, "analytic_verdict", "simulated_verdict")
+    analytic, simulated = SWEEP.fields(line, "analytic_verdict", "simulated_verdict")
+    return analytic, simulated

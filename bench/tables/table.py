@@ -226,9 +226,10 @@ class AppendTable:
         fd = _locked(path, fmt.kind)
         try:
             size = os.fstat(fd).st_size
+            rows: dict[str, bytes] = {}
             if size == 0:
                 os.write(fd, fmt.header)
-                rows, created = {}, True
+                created = True
             else:
                 rows, whole = fmt.parse(os.pread(fd, size, 0), path, torn_ok=True)
                 if whole < size:  # our own torn last line (module doc): its row runs again
@@ -297,7 +298,7 @@ def read_table(path: str | Path) -> list[dict]:
         rows = list(csv.DictReader(f))
     out = []
     for row in rows:
-        typed = {}
+        typed: dict[str, float | str] = {}
         for key, value in row.items():
             try:
                 typed[key] = float(value)

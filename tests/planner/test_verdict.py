@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from slopewalk.planner.compliance import compliant_walk
+from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES
 from slopewalk.planner.plan import plan_walk
@@ -99,6 +100,14 @@ def test_a_sagging_servo_strikes_the_plane(spec):
     fed = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, feedforward=plan.tau)
     held = predict(plan, friction=1.0, walk=fed, stiffness=spec.stiffness)
     assert "strike" not in [e.kind for e in held.events]
+
+
+def test_a_walk_without_its_stiffness_is_refused(spec, plan):
+    """Strike is judged with the servo's kp: a walk given without it is refused up front,
+    even where no sole would strike (the kp would go unread and the gap unnoticed)."""
+    fed = compliant_walk(plan, stiffness=spec.stiffness, feedforward=plan.tau)
+    with pytest.raises(SlopewalkError, match="stiffness"):
+        predict(plan, friction=1.0, walk=fed)
 
 
 def test_saturation_names_the_first_sample_and_the_neediest_joint(spec, plan):
