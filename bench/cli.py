@@ -1,9 +1,11 @@
 """The ``slopewalk`` command: the only place that reads flags and files.
 
-``build_parser`` says what each subcommand does, with examples; the flags and
-their range checks are in ``bench.flags``, what the commands do in
-``bench.commands``. Every refusal is one line on stderr with exit status 2 and
-no traceback; output files appear only whole.
+One builder per subcommand (``_plan_parser``, ..., listed in ``COMMANDS``) says
+what it does, with examples; ``build_parser`` puts them together. The flags, the
+groups several commands share (gait, simulation, batch) and their range checks
+are in ``bench.flags``, what the commands do in ``bench.commands``.
+Every refusal is one line on stderr with exit status 2 and no traceback; output
+files appear only whole.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ from slopewalk.bench.flags import (
     add_gait_flags,
     add_robot_flag,
     add_sim_flags,
+    add_slope_flag,
+    add_step_time_flag,
     integer,
     number,
 )
@@ -45,25 +49,7 @@ def _command(sub, name: str, summary: str, description: str, *examples: str):
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(
-        prog="slopewalk",
-        description=textwrap.fill(
-            "Does the analytic balance prediction of a biped walking on a slope "
-            "(ZMP, Newton-Euler) hold up in MuJoCo? Plan walks, play them, compare, sweep.",
-            79,
-        ),
-        epilog="examples:\n"
-        "  slopewalk plan --step-time 1 --slope 10 --out plan.npz\n"
-        "  slopewalk trial --step-time 1 --slope 15 --out trial.json --record trial.rrd\n"
-        "  slopewalk sweep                 # the paper's sweep into ./results\n"
-        "  slopewalk COMMAND --help        # a command's flags, ranges and defaults\n\n" + DOCS,
-        formatter_class=Formatter,
-    )
-    sub = parser.add_subparsers(
-        dest="command", required=True, parser_class=Parser, metavar="COMMAND"
-    )
-
+def _plan_parser(sub) -> None:
     p = _command(
         sub,
         "plan",
@@ -78,6 +64,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="output .npz")
     p.set_defaults(run=commands.plan)
 
+
+def _mjcf_parser(sub) -> None:
     p = _command(
         sub,
         "mjcf",
@@ -88,18 +76,14 @@ def build_parser() -> argparse.ArgumentParser:
         "slopewalk mjcf --slope 12 --friction 0.6 --out scene.xml",
         "slopewalk mjcf --actuators servo --robot my.toml --out servo.xml",
     )
-    p.add_argument(
-        "--slope",
-        type=number(ranges.SLOPE_DEG),
-        default=0.0,
-        metavar="DEG",
-        help=f"plane inclination [deg], in {ranges.SLOPE_DEG}",
-    )
+    add_slope_flag(p)
     add_sim_flags(p)
     add_robot_flag(p)
     p.add_argument("--out", required=True, metavar="FILE", help="output scene .xml")
     p.set_defaults(run=commands.mjcf)
 
+
+def _trial_parser(sub) -> None:
     p = _command(
         sub,
         "trial",
@@ -146,6 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(run=commands.trial)
 
+
+def _optimize_parser(sub) -> None:
     p = _command(
         sub,
         "optimize",
@@ -157,20 +143,8 @@ def build_parser() -> argparse.ArgumentParser:
         "slopewalk optimize --slope 30 --generations 50 --pareto --out best30.json",
         "slopewalk optimize --slope 15 --foot-length 0.12 --foot-extend toe --out long.json",
     )
-    p.add_argument(
-        "--slope",
-        type=number(ranges.SLOPE_DEG),
-        required=True,
-        metavar="DEG",
-        help=f"plane inclination [deg], in {ranges.SLOPE_DEG}; positive walks uphill",
-    )
-    p.add_argument(
-        "--step-time",
-        type=number(ranges.STEP_TIME),
-        default=1.0,
-        metavar="S",
-        help=f"step completion time t_c [s], in {ranges.STEP_TIME}",
-    )
+    add_slope_flag(p, required=True)
+    add_step_time_flag(p, required=False, default=1.0)
     p.add_argument(
         "--friction",
         type=number(ranges.FRICTION),
@@ -223,6 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="output best-gait .json")
     p.set_defaults(run=commands.optimize)
 
+
+def _compare_parser(sub) -> None:
     p = _command(
         sub,
         "compare",
@@ -248,6 +224,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(run=commands.compare)
 
+
+def _sweep_parser(sub) -> None:
     p = _command(
         sub,
         "sweep",
@@ -286,6 +264,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(run=commands.sweep)
 
+
+def _controllers_parser(sub) -> None:
     p = _command(
         sub,
         "controllers",
@@ -334,6 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="output markdown table")
     p.set_defaults(run=commands.controllers)
 
+
+def _fidelity_parser(sub) -> None:
     p = _command(
         sub,
         "fidelity",
@@ -348,6 +330,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="markdown report")
     p.set_defaults(run=commands.fidelity)
 
+
+def _cop_error_parser(sub) -> None:
     p = _command(
         sub,
         "cop-error",
@@ -362,6 +346,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="FILE", help="markdown report")
     p.set_defaults(run=commands.cop_error)
 
+
+def _envelope_parser(sub) -> None:
     p = _command(
         sub,
         "envelope",
@@ -407,6 +393,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(run=commands.envelope)
 
+
+def _benchmark_parser(sub) -> None:
     p = _command(
         sub,
         "benchmark",
@@ -423,6 +411,44 @@ def build_parser() -> argparse.ArgumentParser:
         help="what to measure",
     )
     p.set_defaults(run=commands.benchmark)
+
+
+COMMANDS = (  # one builder per subcommand, in the order `slopewalk --help` lists them
+    _plan_parser,
+    _mjcf_parser,
+    _trial_parser,
+    _optimize_parser,
+    _compare_parser,
+    _sweep_parser,
+    _controllers_parser,
+    _fidelity_parser,
+    _cop_error_parser,
+    _envelope_parser,
+    _benchmark_parser,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The `slopewalk` parser: its own help, then one subparser per ``COMMANDS`` entry."""
+    parser = Parser(
+        prog="slopewalk",
+        description=textwrap.fill(
+            "Does the analytic balance prediction of a biped walking on a slope "
+            "(ZMP, Newton-Euler) hold up in MuJoCo? Plan walks, play them, compare, sweep.",
+            79,
+        ),
+        epilog="examples:\n"
+        "  slopewalk plan --step-time 1 --slope 10 --out plan.npz\n"
+        "  slopewalk trial --step-time 1 --slope 15 --out trial.json --record trial.rrd\n"
+        "  slopewalk sweep                 # the paper's sweep into ./results\n"
+        "  slopewalk COMMAND --help        # a command's flags, ranges and defaults\n\n" + DOCS,
+        formatter_class=Formatter,
+    )
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=Parser, metavar="COMMAND"
+    )
+    for add in COMMANDS:
+        add(sub)
     return parser
 
 

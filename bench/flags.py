@@ -85,21 +85,35 @@ def integer(allowed: Range):
     return parse
 
 
-def add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = True) -> None:
+def add_step_time_flag(
+    p: argparse.ArgumentParser, *, required: bool = True, default: float | None = None
+) -> None:
     p.add_argument(
         "--step-time",
         type=number(ranges.STEP_TIME),
-        required=step_time_required,
+        required=required,
+        default=default,
         metavar="S",
         help=f"step completion time t_c [s], in {ranges.STEP_TIME}",
     )
+
+
+def add_slope_flag(p: argparse.ArgumentParser, *, required: bool = False) -> None:
     p.add_argument(
         "--slope",
         type=number(ranges.SLOPE_DEG),
-        default=0.0,
+        required=required,
+        default=None if required else 0.0,
         metavar="DEG",
         help=f"plane inclination [deg], in {ranges.SLOPE_DEG}; positive walks uphill",
     )
+
+
+def add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = True) -> None:
+    """The walk's flags (``commands.gait_from_args`` reads them): timing, slope, robot,
+    the gait's shape."""
+    add_step_time_flag(p, required=step_time_required)
+    add_slope_flag(p)
     add_robot_flag(p)
     p.add_argument(
         "--hip-height",
