@@ -30,7 +30,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import cast
 
@@ -139,101 +139,137 @@ def run_batch(
     # a table that is not ours is refused here; one of the previous version may be replaced
     finished = batch.fmt.read_rows(final, previous_ok=resume is not True) if final.exists() else {}
     with interruptible(), AppendTable.open(partial, batch.fmt) as table:
-        try:
-            if not table.created and resume is False:
-                raise TableError(
-                    f"{out_dir} holds an unfinished {batch.name} ({len(table.rows)} "
-                    f"{batch.unit} in {partial.name}): add --resume to finish it, or remove "
-                    f"{partial} to start over"
-                )
-            if table.created and resume:
-                for line in finished.values():
-                    table.append_line(line)
-            _check_keys(table, jobs, batch)
-        except BaseException:
-            if table.created:
-                os.remove(partial)
-            raise
-        done = sum(record_dir is None or (record_dir / f"{k}.rrd").exists() for k in table.rows)
-        todo: Iterable = (
-            j
-            for j in jobs
-            if batch.key(j) not in table.rows
-            or (record_dir is not None and not (record_dir / f"{batch.key(j)}.rrd").exists())
-        )
-        if order is not None:
-            todo = sorted(todo, key=order)
+        _start_partial(table, batch, jobs, finished, resume, out_dir)
+        done, todo = _still_to_run(table, batch, jobs, record_dir, order)
         bar = Progress(total, done, tty=progress, quiet=quiet, name=batch.name)
         if intro is not None:
             bar.say(intro(done, workers))
-        inflight: dict[str, object] = {}
-
-        def pairs():
-            for job in todo:
-                inflight[batch.key(job)] = job
-                yield batch.key(job), (job, None if record_dir is None else str(record_dir))
-
         pool = (
             LocalPool(batch.fn, workers=workers)
             if executor is None
             else FuturesPool(batch.fn, executor, window=4 * workers)
         )
-        ran = errors = 0
-        lost: list[str] = []
-        rows: list[dict] = []
         try:
-            with pool:
-                for key, outcome in pool.run(pairs()):
-                    job = inflight.pop(key)
-                    if isinstance(outcome, Lost) and not outcome.known:
-                        lost.append(f"{batch.label(job)}: {outcome.cause}")
-                        bar.update(f"{batch.label(job)}: lost")
-                        continue
-                    row: dict = (
-                        batch.error_row(job, outcome.cause)
-                        if isinstance(outcome, Lost)
-                        else cast(dict, outcome)  # a job's row; a Lost is handled above
-                    )
-                    table.append(row)
-                    rows.append(row)
-                    ran += 1
-                    errors += bool(batch.is_error(row))
-                    left = total - done - ran
-                    verdict = (
-                        batch.outcome(row)
-                        if batch.outcome is not None
-                        else "/".join(str(row.get(c)) for c in batch.fmt.verdicts)
-                    )
-                    extra = after_row(row, left) if after_row is not None and left > 0 else ""
-                    bar.update(f"{batch.label(job)}: {verdict}", extra)
+            played = _play(pool, todo, table, batch, bar, record_dir, total - done, after_row)
         except BaseException as err:
             bar.close()
             if table.created and not table.rows:  # nothing of ours to keep: leave no file
                 os.remove(partial)
             if not isinstance(err, Interrupted):
                 raise
-            raise Stopped(
-                err.signum,
-                f"stopped by {err.args[0]}: {len(table.rows)} of {total} {batch.unit} are in "
-                f"{partial}; run the same command with --resume to finish"
-                if table.rows
-                else f"stopped by {err.args[0]} before any of the {batch.unit} finished; nothing "
-                "written",
-            ) from None
+            raise _stopped(err, table, batch, total, partial) from None
         bar.close()
-        if not lost:
+        if not played.lost:
             table.write_finished(final, (batch.key(j) for j in jobs))
             os.remove(partial)
         counts = dict(table.counts())
     return BatchResult(
-        table=final if not lost else partial,
+        table=final if not played.lost else partial,
         total=total,
         resumed=done,
-        ran=ran,
-        errors=errors,
-        lost=tuple(lost),
+        ran=played.ran,
+        errors=played.errors,
+        lost=tuple(played.lost),
         verdicts=counts,
-        rows=tuple(rows),
+        rows=tuple(played.rows),
+    )
+
+
+def _start_partial(
+    table: AppendTable, batch: Batch, jobs: Iterable, finished: dict, resume, out_dir: Path
+) -> None:
+    """Refuse an unfinished run without ``resume`` and another run's rows; a fresh partial
+    table resumed from a finished one starts with its rows. A refused new table is removed."""
+    try:
+        if not table.created and resume is False:
+            raise TableError(
+                f"{out_dir} holds an unfinished {batch.name} ({len(table.rows)} "
+                f"{batch.unit} in {table.path.name}): add --resume to finish it, or remove "
+                f"{table.path} to start over"
+            )
+        if table.created and resume:
+            for line in finished.values():
+                table.append_line(line)
+        _check_keys(table, jobs, batch)
+    except BaseException:
+        if table.created:
+            os.remove(table.path)
+        raise
+
+
+def _still_to_run(
+    table: AppendTable, batch: Batch, jobs: Iterable, record_dir: Path | None, order
+) -> tuple[int, Iterable]:
+    """(jobs done, the jobs to run): a job is done when its row is in the table and, if
+    recordings are asked for, its recording exists."""
+
+    def recorded(key) -> bool:
+        return record_dir is None or (record_dir / f"{key}.rrd").exists()
+
+    done = sum(recorded(k) for k in table.rows)
+    todo: Iterable = (
+        j for j in jobs if batch.key(j) not in table.rows or not recorded(batch.key(j))
+    )
+    if order is not None:
+        todo = sorted(todo, key=order)
+    return done, todo
+
+
+@dataclass
+class _Played:
+    """What ``_play`` did: rows appended, error rows among them, lost jobs, the rows."""
+
+    ran: int = 0
+    errors: int = 0
+    lost: list[str] = field(default_factory=list)
+    rows: list[dict] = field(default_factory=list)
+
+
+def _play(pool, todo, table, batch, bar, record_dir, left_before, after_row) -> _Played:
+    """Run ``todo`` on ``pool``, appending each job's row to ``table`` as it ends."""
+    inflight: dict[str, object] = {}
+    played = _Played()
+
+    def pairs():
+        for job in todo:
+            inflight[batch.key(job)] = job
+            yield batch.key(job), (job, None if record_dir is None else str(record_dir))
+
+    with pool:
+        for key, outcome in pool.run(pairs()):
+            job = inflight.pop(key)
+            if isinstance(outcome, Lost) and not outcome.known:
+                played.lost.append(f"{batch.label(job)}: {outcome.cause}")
+                bar.update(f"{batch.label(job)}: lost")
+                continue
+            row: dict = (
+                batch.error_row(job, outcome.cause)
+                if isinstance(outcome, Lost)
+                else cast(dict, outcome)  # a job's row; a Lost is handled above
+            )
+            table.append(row)
+            played.rows.append(row)
+            played.ran += 1
+            played.errors += bool(batch.is_error(row))
+            left = left_before - played.ran
+            verdict = (
+                batch.outcome(row)
+                if batch.outcome is not None
+                else "/".join(str(row.get(c)) for c in batch.fmt.verdicts)
+            )
+            extra = after_row(row, left) if after_row is not None and left > 0 else ""
+            bar.update(f"{batch.label(job)}: {verdict}", extra)
+    return played
+
+
+def _stopped(err: Interrupted, table: AppendTable, batch: Batch, total: int, partial: Path):
+    """The ``Stopped`` of a run interrupted by a signal: what was kept and how to go on."""
+    return Stopped(
+        err.signum,
+        f"stopped by {err.args[0]}: {len(table.rows)} of {total} {batch.unit} are in "
+        f"{partial}; run the same command with --resume to finish"
+        if table.rows
+        else f"stopped by {err.args[0]} before any of the {batch.unit} finished; nothing written",
     )
 
 
