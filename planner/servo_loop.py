@@ -137,6 +137,23 @@ def _landed(mass, jac, rate):
     return rate - mj @ (np.linalg.pinv(jac @ mj) @ speed)
 
 
+def _backward_euler(m, c, kk, force, d, v, h, jac):
+    """One step of m a + c v' + kk δ' = force: v' = v + h a, δ' = δ + h v'; (v', δ', a).
+
+    ``jac``: the held rows of the second sole's Jacobian where it stops and stays
+    (J v' = 0, after ``_landed``), or None.
+    """
+    matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+    if jac is not None:
+        v = _landed(m, jac, v)
+        rhs = force - c @ v - kk @ (d + h * v)
+        a = _constrained(matrix, rhs, jac, -jac @ v / h)
+    else:
+        a = np.linalg.solve(matrix, rhs)
+    v = v + h * a
+    return v, d + h * v, a
+
+
 def servo_walk(
     plan: Plan,
     *,
@@ -204,16 +221,7 @@ def servo_walk(
         c = velocity_c[k] + (damping + np.where(free, velocity_gain, 0.0)) * eye
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
         force = held + np.where(free, tau_ff[k] - velocity_gain * plan.qd[k], 0.0) - need[k]
-        # backward Euler: v' = v + h a, δ' = δ + h v'
-        matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
-        if both[k] and h > 0:  # the second sole stops and stays: J v' = 0
-            v = _landed(m, jac[k], v)
-            rhs = force - c @ v - kk @ (d + h * v)
-            a = _constrained(matrix, rhs, jac[k], -jac[k] @ v / h)
-        else:
-            a = np.linalg.solve(matrix, rhs)
-        v = v + h * a
-        d = d + h * v
+        v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if both[k] and h > 0 else None)
         if not (np.isfinite(d).all() and np.abs(d).max() < np.pi):
             finite = False  # the loop has let go of the plan: hold the last pose
             delta[k:], rate[k:], accel[k:] = delta[k - 1], 0.0, 0.0

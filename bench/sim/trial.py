@@ -42,12 +42,11 @@ from slopewalk.bench.sim.prediction import predict_trial
 from slopewalk.bench.sim.support import support_difference
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.joints import stance_swing_to_left_right
+from slopewalk.planner.kinematics import GRAVITY
 from slopewalk.planner.plan import Plan, plan_walk
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.verdict import TIP_ANGLE
 from slopewalk.planner.zmp import signed_margin
-
-G = 9.81
 
 
 @dataclass(frozen=True)
@@ -241,7 +240,7 @@ def compare(
     With ``predict`` False the compliant and predicted verdicts read ``NOT_PREDICTED``,
     their margin and rotation NaN, and the series have no ``*_compliant`` entries.
     """
-    weight = plan.spec.total_mass * G
+    weight = plan.spec.total_mass * GRAVITY
     events = detect(recording, weight=weight, hip_height=plan.params.hip_height)
     s, t = recording.sensors, recording.t
     walk = (t >= plan.t[0]) & (t <= plan.t[-1])
@@ -301,31 +300,36 @@ def compare(
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
-        series={
-            "t": tw,
-            "zmp_analytic": zmp,
-            "zmp_lipm": lipm,
-            "cop": cop,
-            "foot_cop": s.foot_cop[walk],
-            "foot_force": s.foot_force[walk],
-            "q_planned": q_plan,
-            "q_simulated": s.q[walk],
-            "standing": standing,
-            "margin_analytic": on_walk(plan.margin)[:, 0],
-            **(
-                {
-                    "zmp_compliant": on_walk(predicted.walk.plan.zmp),
-                    "margin_compliant": on_walk(predicted.walk.plan.margin)[:, 0],
-                }
-                if predicted
-                else {}
-            ),
-            "actuator_force": s.actuator_force[walk],
-            "sole": s.sole[walk],
-            "pelvis_height": s.pelvis_height[walk],
-            "qpos": np.column_stack([s.pelvis_qpos, s.q])[walk],
-        },
+        series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing),
     )
+
+
+def _series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing) -> dict:
+    """``TrialResult.series``: the plan's and the simulation's series over the walk."""
+    return {
+        "t": tw,
+        "zmp_analytic": zmp,
+        "zmp_lipm": lipm,
+        "cop": cop,
+        "foot_cop": s.foot_cop[walk],
+        "foot_force": s.foot_force[walk],
+        "q_planned": q_plan,
+        "q_simulated": s.q[walk],
+        "standing": standing,
+        "margin_analytic": on_walk(plan.margin)[:, 0],
+        **(
+            {
+                "zmp_compliant": on_walk(predicted.walk.plan.zmp),
+                "margin_compliant": on_walk(predicted.walk.plan.margin)[:, 0],
+            }
+            if predicted
+            else {}
+        ),
+        "actuator_force": s.actuator_force[walk],
+        "sole": s.sole[walk],
+        "pelvis_height": s.pelvis_height[walk],
+        "qpos": np.column_stack([s.pelvis_qpos, s.q])[walk],
+    }
 
 
 _PREDICTED_FIELDS = ("compliant_min_margin", "predicted_rotation")  # NaN when not predicted
