@@ -90,7 +90,10 @@ def rotation_slope_to_world(slope: float) -> np.ndarray:
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
-def gravity_in_slope(slope: float, g: float = 9.81) -> np.ndarray:
+GRAVITY = 9.81  # [m/s²]: g, the one value of the planner, the bench and MuJoCo's default
+
+
+def gravity_in_slope(slope: float, g: float = GRAVITY) -> np.ndarray:
     """Gravity vector in S [m/s²], shape (3,): (−g sin θs, 0, −g cos θs)."""
     return rotation_slope_to_world(slope).T @ np.array([0.0, 0.0, -g])
 

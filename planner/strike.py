@@ -27,9 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.kinematics import GRAVITY, Chain
 
-G = 9.81  # [m/s²]
 _EPS = 1e-6  # [rad], finite-difference step of the Jacobian
 
 
@@ -62,7 +61,7 @@ def strike_roll(plan, stiffness: float) -> np.ndarray:
     edge_y = plan.stance_sole[rows, 1] - towards_swing * half
     lever = np.abs(plan.swing_sole[rows, 1] - edge_y)
     arm = np.clip(towards_swing * (plan.com[rows, 1] - edge_y), 0.0, None)
-    weight = plan.spec.total_mass * G
+    weight = plan.spec.total_mass * GRAVITY
     absorbed = sole_compliance_z(plan, rows, stiffness) * weight * arm / lever
     theta[rows] = np.maximum(0.0, -plan.swing_sole[rows, 2] - absorbed) / lever
     return theta

@@ -43,6 +43,7 @@ import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
+from slopewalk.planner.kinematics import GRAVITY
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
@@ -50,7 +51,6 @@ from slopewalk.planner.tipping import excursion_integral, foot_rotation
 SLIP_DISTANCE = 0.005  # [m]
 LOADED_FRACTION = 0.10  # of the robot's weight
 TIP_ANGLE = np.deg2rad(5.0)  # [rad]
-G = 9.81  # [m/s²]
 
 PREDICTED_KINDS = ("joint_limit", "saturation", "tip", "strike", "slip", "foot_slide")
 VERDICT_KINDS = tuple(k for k in PREDICTED_KINDS if k != "saturation")
@@ -176,7 +176,7 @@ def planned_slide(plan) -> float:
 
 def _loaded_runs(plan):
     """(first sample, distance moved since it) of each DSP run where the second foot is loaded."""
-    weight = plan.spec.total_mass * G
+    weight = plan.spec.total_mass * GRAVITY
     loaded = plan.double_support & (plan.swing_force[:, 2] > LOADED_FRACTION * weight)
     edges = np.diff(np.concatenate([[0], loaded.astype(int), [0]]))
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):

@@ -32,7 +32,8 @@ import math
 
 import numpy as np
 
-G = 9.81  # [m/s²]
+from slopewalk.planner.kinematics import GRAVITY
+
 GAIN_X, GAIN_Y = 0.05, 0.15  # K, sagittal and lateral
 MIN_LOAD = 0.5  # [N]
 MAX_OFFSET = 0.2  # [rad]
@@ -46,7 +47,7 @@ def capture_point_pelvis(observation: dict) -> np.ndarray:
     vx, vy, _ = observation["com_vel"].tolist()
     rx, ry, _ = observation["com_ref"].tolist()
     wx, wy, _ = observation["com_vel_ref"].tolist()
-    omega = math.sqrt(G / max(cz, 0.05))
+    omega = math.sqrt(GRAVITY / max(cz, 0.05))
     shift_x = -GAIN_X * ((cx + vx / omega) - (rx + wx / omega))  # δ [m]
     shift_y = -GAIN_Y * ((cy + vy / omega) - (ry + wy / omega))
     forces, soles = observation["foot_force"], observation["sole"]

@@ -65,8 +65,7 @@ import numpy as np
 
 from slopewalk.bench.sim.contact import FOOT_GEOMS
 from slopewalk.planner.joints import LEFT
-
-G = 9.81  # [m/s²]
+from slopewalk.planner.kinematics import GRAVITY
 
 
 def impedance(r, solimp) -> tuple[np.ndarray, np.ndarray]:
@@ -157,7 +156,7 @@ def corner_stiffness(model: mujoco.MjModel, weight: float) -> float:
 def scene_corner_stiffness(model: mujoco.MjModel) -> float:
     """``corner_stiffness`` of a compiled scene under the robot's own weight."""
     mass = float(np.sum(model.body_mass))
-    return corner_stiffness(model, mass * G)
+    return corner_stiffness(model, mass * GRAVITY)
 
 
 def sole_equilibrium(
