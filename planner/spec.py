@@ -21,7 +21,8 @@ from slopewalk.planner.errors import SpecError
 from slopewalk.planner.ranges import Range
 
 LINK_NAMES = ("pelvis", "thigh", "shank", "ankle", "foot")
-JOINT_KINDS = ("hip_pitch", "knee", "ankle_pitch", "ankle_roll")
+# the keys of [joint_limits]: one per joint kind of a leg (joints.JOINT_KINDS: of each q entry)
+JOINT_LIMIT_KEYS = ("hip_pitch", "knee", "ankle_pitch", "ankle_roll")
 GEOMETRY_KEYS = (
     "thigh",
     "shank",
@@ -249,7 +250,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     servo = _table(data, "servo")
     _known(geometry, GEOMETRY_KEYS, "geometry.")
     _known(links_table, LINK_NAMES, "links.")
-    _known(limits, JOINT_KINDS, "joint_limits.")
+    _known(limits, JOINT_LIMIT_KEYS, "joint_limits.")
     _known(servo, tuple(SERVO), "servo.")
     links: dict[str, LinkInertial] = {}
     for name in LINK_NAMES:
@@ -261,7 +262,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
             _vector(link, "com", f"links.{name}"),
             _vector(link, "inertia", f"links.{name}"),
         )
-    joint_limits = {kind: _vector(limits, kind, "joint_limits", 2) for kind in JOINT_KINDS}
+    joint_limits = {kind: _vector(limits, kind, "joint_limits", 2) for kind in JOINT_LIMIT_KEYS}
     return RobotSpec(
         name=data.get("name", Path(source).stem),
         **{key: _number(geometry, key, "geometry") for key in GEOMETRY_KEYS},

@@ -35,7 +35,7 @@ from slopewalk.planner.gait import MAX_SLOPE, GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.ranges import FRICTION
-from slopewalk.planner.spec import JOINT_KINDS, RobotSpec, load_spec
+from slopewalk.planner.spec import JOINT_LIMIT_KEYS, RobotSpec, load_spec
 
 ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 _SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole
@@ -332,7 +332,7 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
     ax12.joint.armature, ax12.joint.frictionloss = servo.armature, servo.frictionloss
     ax12.actuator.set_to_position(kp=servo.kp, kv=servo.kv)
     ax12.actuator.forcerange = [-servo.force_limit, servo.force_limit]
-    for kind in JOINT_KINDS:
+    for kind in JOINT_LIMIT_KEYS:
         cls = mjs.add_default(kind, ax12)
         lower, upper = spec.joint_limits[kind]
         cls.joint.range = [lower, upper]
@@ -356,7 +356,7 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
         ankle = shank.add_body(name=f"{pre}ankle", pos=[0, 0, -spec.shank])
         foot_body = ankle.add_body(name=f"{pre}foot")
         for body, link, kind in zip(
-            (thigh, shank, ankle, foot_body), ("thigh", "shank", "ankle", "foot"), JOINT_KINDS,
+            (thigh, shank, ankle, foot_body), ("thigh", "shank", "ankle", "foot"), JOINT_LIMIT_KEYS,
             strict=True,
         ):  # fmt: skip
             _set_inertial(body, spec, link, right)
