@@ -235,23 +235,7 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> 
     ``simulate(report, spec)`` plays each report's best gait through the MuJoCo bench
     (``experiments.claim_trials.play_ga_best``): (what it did, walked or None).
     """
-    reports = []
-    for path in sorted(Path(optimize_dir).glob("**/*.json")):
-        data = json.loads(path.read_text())
-        if isinstance(data, dict) and "best" in data and "slope_deg" in data:
-            reports.append((path, data))
-    # For each case the best search wins: feasible first, then the larger margin.
-    reports.sort(
-        key=lambda item: (
-            item[1]["feasible"],
-            item[1].get("evaluations", 0),
-            item[1]["best"]["min_margin_m"],
-        )
-    )
-
-    def constraint(report):
-        return report.get("settings", {}).get("constraint", "penalty")
-
+    reports = _optimize_reports(optimize_dir)
     if not reports:
         return [
             _claim(
@@ -271,70 +255,100 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> 
             played[id(report)] = simulate(report, spec)
         return played[id(report)]
 
-    def describe(report):
-        b = report["best"]
-        return (
-            f"{'feasible' if report['feasible'] else 'INFEASIBLE'}: Hz {b['hip_height_m']:.3f}"
-            f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {b['tilt_deg']:.2f}°, work "
-            f"{b['work_J']:.3f} J, min margin {b['min_margin_m'] * 1e3:.1f} mm"
-            + _fine_check(report)
-            + f" [{constraint(report)} constraint]"
-        )
-
     out = []
     nominal = [(p, r) for p, r in reports if abs(r["foot_length_m"] - spec.foot_length) < 1e-9]
     at = {round(r["slope_deg"], 3): (p, r) for p, r in nominal}  # degrees pass through radians
     if 22.5 in at:
-        path, r = at[22.5]
-        out.append(
-            _claim(
-                "GA at 22.5°: θ1max = −9.18°, Hz = 0.151 m, Szmax = 0.013 m, ZMP inside",
-                "θ1max −9.18°, Hz 0.151 m, Szmax 0.013 m; ZMP inside",
-                describe(r),
-                play(r)[0],
-                _yes(r["feasible"], play(r)[1]),
-                _relative(path, optimize_dir),
-            )
-        )
+        out.append(_ga_claim_22_5(*at[22.5], play, optimize_dir))
     if 30.0 in at:
-        path, r = at[30.0]
-        longer = sorted(
-            (r2["foot_length_m"], p2, r2)
-            for p2, r2 in reports
-            if round(r2["slope_deg"], 3) == 30.0 and r2["foot_length_m"] > spec.foot_length
-        )
-        first = next(((length, p2, r2) for length, p2, r2 in longer if r2["feasible"]), None)
-        found = (
-            f"first feasible with a {first[0] * 1e3:.0f} mm foot (ankle to toe "
-            f"{first[2]['ankle_to_toe_m'] * 1e3:.0f} mm): {describe(first[2])}"
-            if first
-            else "no longer foot tried made it feasible"
-        )
-        penalty_feasible = [
-            r2["foot_length_m"]
-            for _, r2 in reports
-            if round(r2["slope_deg"], 3) == 30.0 and r2["feasible"] and constraint(r2) == "penalty"
-        ]
-        found += (
-            "; with the paper's step penalty the GA found no feasible 30° gait at any "
-            "foot tried (the flat penalty hides how far from feasible a gait is)"
-            if not penalty_feasible
-            else ""
-        )
-        out.append(
-            _claim(
-                "30°: no feasible gait until the foot is lengthened by 0.01 m",
-                "best fitness stays at the penalty; feasible after +0.01 m of foot",
-                f"nominal foot: {describe(r)}; {found}",
-                play(first[2])[0] if first else "-",
-                _yes(
-                    bool(not r["feasible"] and first and first[0] <= spec.foot_length + 0.0100001),
-                    play(first[2])[1] if first else None,
-                ),
-                _relative(first[1] if first else path, optimize_dir),
-            )
-        )
+        out.append(_ga_claim_30(*at[30.0], reports, spec, play, optimize_dir))
     return out
+
+
+def _optimize_reports(optimize_dir: str | Path) -> list[tuple[Path, dict]]:
+    """(path, report) of every ``slopewalk optimize`` report there, the best search last."""
+    reports = []
+    for path in sorted(Path(optimize_dir).glob("**/*.json")):
+        data = json.loads(path.read_text())
+        if isinstance(data, dict) and "best" in data and "slope_deg" in data:
+            reports.append((path, data))
+    # For each case the best search wins: feasible first, then the larger margin.
+    reports.sort(
+        key=lambda item: (
+            item[1]["feasible"],
+            item[1].get("evaluations", 0),
+            item[1]["best"]["min_margin_m"],
+        )
+    )
+    return reports
+
+
+def _constraint(report: dict) -> str:
+    return report.get("settings", {}).get("constraint", "penalty")
+
+
+def _describe(report: dict) -> str:
+    """A report's best gait in one line: feasibility, parameters, work, margin, constraint."""
+    b = report["best"]
+    return (
+        f"{'feasible' if report['feasible'] else 'INFEASIBLE'}: Hz {b['hip_height_m']:.3f}"
+        f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {b['tilt_deg']:.2f}°, work "
+        f"{b['work_J']:.3f} J, min margin {b['min_margin_m'] * 1e3:.1f} mm"
+        + _fine_check(report)
+        + f" [{_constraint(report)} constraint]"
+    )
+
+
+def _ga_claim_22_5(path: Path, r: dict, play: Callable, optimize_dir) -> dict:
+    """The paper's 22.5° case: the GA's gait and whether its ZMP stays inside."""
+    return _claim(
+        "GA at 22.5°: θ1max = −9.18°, Hz = 0.151 m, Szmax = 0.013 m, ZMP inside",
+        "θ1max −9.18°, Hz 0.151 m, Szmax 0.013 m; ZMP inside",
+        _describe(r),
+        play(r)[0],
+        _yes(r["feasible"], play(r)[1]),
+        _relative(path, optimize_dir),
+    )
+
+
+def _ga_claim_30(
+    path: Path, r: dict, reports: list, spec: RobotSpec, play: Callable, optimize_dir
+) -> dict:
+    """The paper's 30° case: infeasible with the nominal foot, feasible 0.01 m longer."""
+    longer = sorted(
+        (r2["foot_length_m"], p2, r2)
+        for p2, r2 in reports
+        if round(r2["slope_deg"], 3) == 30.0 and r2["foot_length_m"] > spec.foot_length
+    )
+    first = next(((length, p2, r2) for length, p2, r2 in longer if r2["feasible"]), None)
+    found = (
+        f"first feasible with a {first[0] * 1e3:.0f} mm foot (ankle to toe "
+        f"{first[2]['ankle_to_toe_m'] * 1e3:.0f} mm): {_describe(first[2])}"
+        if first
+        else "no longer foot tried made it feasible"
+    )
+    penalty_feasible = [
+        r2["foot_length_m"]
+        for _, r2 in reports
+        if round(r2["slope_deg"], 3) == 30.0 and r2["feasible"] and _constraint(r2) == "penalty"
+    ]
+    found += (
+        "; with the paper's step penalty the GA found no feasible 30° gait at any "
+        "foot tried (the flat penalty hides how far from feasible a gait is)"
+        if not penalty_feasible
+        else ""
+    )
+    return _claim(
+        "30°: no feasible gait until the foot is lengthened by 0.01 m",
+        "best fitness stays at the penalty; feasible after +0.01 m of foot",
+        f"nominal foot: {_describe(r)}; {found}",
+        play(first[2])[0] if first else "-",
+        _yes(
+            bool(not r["feasible"] and first and first[0] <= spec.foot_length + 0.0100001),
+            play(first[2])[1] if first else None,
+        ),
+        _relative(first[1] if first else path, optimize_dir),
+    )
 
 
 def _relative(path: Path, optimize_dir) -> str:
