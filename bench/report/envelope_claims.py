@@ -54,86 +54,87 @@ def envelope_claims(rows, cite: str) -> list[dict]:
     rows = _paper(rows)
     modes = _modes(rows)
     flat = sorted((r for r in rows if r["slope_deg"] == 0.0), key=lambda r: r["step_time"])
-    out = []
-    if flat:
-        feasible = [r for r in flat if r["feasible"] == "True"]
-        fastest = feasible[0] if feasible else None
-        by_t = {r["step_time"]: r for r in flat}
-        walked = {m: [r["step_time"] for r in flat if _walks(r, m)] for m in modes}
-        sim = "; ".join(
-            f"{m}: fastest walked {min(ts):g} s" if ts else f"{m}: walks none"
-            for m, ts in walked.items()
-        )
-        analytic = (
-            f"fastest t_c with a gait inside: {fastest['step_time']:g} s (largest margin "
-            f"{fastest['maxmargin_margin_mm']:.1f} mm)"
-            if fastest
-            else "no step time of the grid has a gait inside"
-        )
-        for t in (0.5, 0.4):
-            if t in by_t:
-                analytic += f"; at {t:g} s: largest margin {by_t[t]['maxmargin_margin_mm']:.1f} mm"
-        if fastest:
-            sim = f"that gait in MuJoCo: {_sim_text(fastest, modes)}; " + sim
-
-        def agrees(ok):
-            return ok(by_t[0.5]) and not ok(by_t[0.4]) if 0.5 in by_t and 0.4 in by_t else None
-
-        first = modes[0] if modes else None
-        out.append(
-            {
-                "claim": "flat ground: fastest step time with a gait inside the polygon (the "
-                "GA's best gait per step time)",
-                "paper": "0.5 s (ZMP outside at 0.4 s)",
-                "analytic": analytic,
-                "simulated": sim,
-                "agree": f"analytic {_word(agrees(lambda r: r['feasible'] == 'True'))}, simulated "
-                f"{_word(agrees(lambda r: _walks(r, first)) if first else None)}"
-                + (f" ({first})" if first else ""),
-                "evidence": f"envelope.png, {cite} (slope 0)",
-            }
-        )
     line = sorted(
         (r for r in rows if r["step_time"] == NOMINAL_STEP_TIME), key=lambda r: r["slope_deg"]
     )
-    if line:
-        up = [r["slope_deg"] for r in line if r["slope_deg"] >= 0 and r["feasible"] == "True"]
-        down = [r["slope_deg"] for r in line if r["slope_deg"] <= 0 and r["feasible"] == "True"]
-        walked = {m: ([r["slope_deg"] for r in line if _walks(r, m)]) for m in modes}
-        analytic = (
-            f"steepest uphill with the ZMP inside: {max(up):g}°" if up else "no uphill slope inside"
-        ) + (f"; steepest downhill: {min(down):g}°" if down else "; no downhill slope inside")
-        analytic += "; largest margin [mm]: " + ", ".join(
-            f"{r['slope_deg']:g}°: {r['maxmargin_margin_mm']:.1f}" for r in line
-        )
-        sim = "; ".join(
-            f"{m}: walks {min(s):g}° … {max(s):g}° ({len(s)} of {len(line)} slopes)"
-            if s
-            else f"{m}: walks none"
-            for m, s in walked.items()
-        )
-        steep = [r["slope_deg"] for r in line if r["slope_deg"] > 22.5]
+    return ([_flat_claim(flat, modes, cite)] if flat else []) + (
+        [_slope_claim(line, modes, cite)] if line else []
+    )
 
-        def agrees(ok_slopes):
-            return (
-                bool(ok_slopes) and 15 <= max(ok_slopes) <= 22.5 and not set(steep) & set(ok_slopes)
-            )
 
-        first = modes[0] if modes else None
-        ups = [s for s in walked.get(first, []) if s >= 0] if first else []
-        out.append(
-            {
-                "claim": "t_c = 1 s: steepest uphill slope with the ZMP inside (the GA's best "
-                "gait per slope), and the steepest downhill one",
-                "paper": "15° inside; rear edge at 18–22.5°; outside beyond (no downhill case)",
-                "analytic": analytic,
-                "simulated": sim,
-                "agree": f"analytic {_word(agrees(up))}, simulated "
-                f"{_word(agrees(ups) if first else None)}" + (f" ({first})" if first else ""),
-                "evidence": f"envelope.png, {cite} (t_c = 1 s)",
-            }
-        )
-    return out
+def _flat_claim(flat, modes, cite: str) -> dict:
+    """Claim 1 from the flat cells, fastest first: 0.5 s inside, 0.4 s outside."""
+    feasible = [r for r in flat if r["feasible"] == "True"]
+    fastest = feasible[0] if feasible else None
+    by_t = {r["step_time"]: r for r in flat}
+    walked = {m: [r["step_time"] for r in flat if _walks(r, m)] for m in modes}
+    sim = "; ".join(
+        f"{m}: fastest walked {min(ts):g} s" if ts else f"{m}: walks none"
+        for m, ts in walked.items()
+    )
+    analytic = (
+        f"fastest t_c with a gait inside: {fastest['step_time']:g} s (largest margin "
+        f"{fastest['maxmargin_margin_mm']:.1f} mm)"
+        if fastest
+        else "no step time of the grid has a gait inside"
+    )
+    for t in (0.5, 0.4):
+        if t in by_t:
+            analytic += f"; at {t:g} s: largest margin {by_t[t]['maxmargin_margin_mm']:.1f} mm"
+    if fastest:
+        sim = f"that gait in MuJoCo: {_sim_text(fastest, modes)}; " + sim
+
+    def agrees(ok):
+        return ok(by_t[0.5]) and not ok(by_t[0.4]) if 0.5 in by_t and 0.4 in by_t else None
+
+    first = modes[0] if modes else None
+    return {
+        "claim": "flat ground: fastest step time with a gait inside the polygon (the "
+        "GA's best gait per step time)",
+        "paper": "0.5 s (ZMP outside at 0.4 s)",
+        "analytic": analytic,
+        "simulated": sim,
+        "agree": f"analytic {_word(agrees(lambda r: r['feasible'] == 'True'))}, simulated "
+        f"{_word(agrees(lambda r: _walks(r, first)) if first else None)}"
+        + (f" ({first})" if first else ""),
+        "evidence": f"envelope.png, {cite} (slope 0)",
+    }
+
+
+def _slope_claim(line, modes, cite: str) -> dict:
+    """Claim 2 from the cells at the nominal step time, by slope: 15° inside, beyond 22.5° not."""
+    up = [r["slope_deg"] for r in line if r["slope_deg"] >= 0 and r["feasible"] == "True"]
+    down = [r["slope_deg"] for r in line if r["slope_deg"] <= 0 and r["feasible"] == "True"]
+    walked = {m: ([r["slope_deg"] for r in line if _walks(r, m)]) for m in modes}
+    analytic = (
+        f"steepest uphill with the ZMP inside: {max(up):g}°" if up else "no uphill slope inside"
+    ) + (f"; steepest downhill: {min(down):g}°" if down else "; no downhill slope inside")
+    analytic += "; largest margin [mm]: " + ", ".join(
+        f"{r['slope_deg']:g}°: {r['maxmargin_margin_mm']:.1f}" for r in line
+    )
+    sim = "; ".join(
+        f"{m}: walks {min(s):g}° … {max(s):g}° ({len(s)} of {len(line)} slopes)"
+        if s
+        else f"{m}: walks none"
+        for m, s in walked.items()
+    )
+    steep = [r["slope_deg"] for r in line if r["slope_deg"] > 22.5]
+
+    def agrees(ok_slopes):
+        return bool(ok_slopes) and 15 <= max(ok_slopes) <= 22.5 and not set(steep) & set(ok_slopes)
+
+    first = modes[0] if modes else None
+    ups = [s for s in walked.get(first, []) if s >= 0] if first else []
+    return {
+        "claim": "t_c = 1 s: steepest uphill slope with the ZMP inside (the GA's best "
+        "gait per slope), and the steepest downhill one",
+        "paper": "15° inside; rear edge at 18–22.5°; outside beyond (no downhill case)",
+        "analytic": analytic,
+        "simulated": sim,
+        "agree": f"analytic {_word(agrees(up))}, simulated "
+        f"{_word(agrees(ups) if first else None)}" + (f" ({first})" if first else ""),
+        "evidence": f"envelope.png, {cite} (t_c = 1 s)",
+    }
 
 
 def envelope_cell_note(rows, slope_deg: float, cite: str) -> str:
