@@ -52,6 +52,7 @@ def evaluate_reference(spec, params: GaitParams, population) -> tuple[np.ndarray
     return np.where(bad, np.inf, work), np.where(bad, -np.inf, margin)
 
 
+# long: the readable twin of planner/kernel, its stages in the kernel's order (module doc)
 def solve_reference(
     spec, timeline, slope, hip_height, lift, tilt, pelvis_offset=None, step_length=None,
     sway_share=None, *, strict, light=False,

@@ -200,6 +200,7 @@ def _leg(up, uv, ua, wq, wv, wa, l1, l2):
     return cs, ss, vs, as_, ct, st, vt, at, np.sqrt(d2), cphi, eu, ew
 
 
+# long: a numba kernel whose stages are loops over the block, timed as one (module doc)
 @njit(**_KW)
 def _gait_ik(x, y, geometry, n, w):
     """Gait in closed form and the IK of both legs: rates, DH cos/sin, tan(q/2), λ, share.

@@ -129,6 +129,7 @@ def double_support_slide(plan: Plan, case: Case) -> tuple[float, float, float]:
     return float(planned), float(simulated), float(np.mean(limited))
 
 
+# long: to be split once the actuator-mode work in this module has landed (issue 20)
 def cop_error_report(spec: RobotSpec, *, command: str = "") -> str:
     """Markdown of the flat 2 s walk's CoP error, decomposed (module doc)."""
     plan = plan_walk(spec, GaitParams.nominal(spec, STEP_TIME, steps=STEPS))

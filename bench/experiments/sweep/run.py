@@ -226,6 +226,7 @@ class SweepSummary:
         return out + [f"lost: {line}" for line in self.lost[:5]]
 
 
+# long: to be split once the actuator-mode work in this module has landed (issue 20)
 def run_sweep(
     config: SweepConfig,
     out_dir: str | Path,
