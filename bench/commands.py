@@ -8,18 +8,24 @@ radians inside.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import json
 import os
 import sys
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from slopewalk.bench.files import atomic_paths, check_output, check_output_dir, in_package
 from slopewalk.planner.errors import SlopewalkError
 
+if TYPE_CHECKING:
+    from slopewalk.planner.gait import GaitParams
+    from slopewalk.planner.spec import RobotSpec
 
-def gait_from_args(args, spec):
+
+def gait_from_args(args: argparse.Namespace, spec: RobotSpec) -> GaitParams:
     """GaitParams from parsed flags (degrees → radians here)."""
     from slopewalk.planner.gait import GaitParams
 
@@ -41,7 +47,7 @@ def gait_from_args(args, spec):
     return GaitParams.nominal(spec, args.step_time, **overrides)
 
 
-def plan(args) -> None:
+def plan(args: argparse.Namespace) -> None:
     from slopewalk.planner.plan import plan_walk
     from slopewalk.planner.spec import load_spec
     from slopewalk.planner.verdict import predict
@@ -83,7 +89,7 @@ def plan(args) -> None:
     print(f"wrote {args.out}")
 
 
-def mjcf(args) -> None:
+def mjcf(args: argparse.Namespace) -> None:
     from slopewalk.bench.sim.model import scene_xml
     from slopewalk.planner.spec import load_spec
 
@@ -100,7 +106,7 @@ def mjcf(args) -> None:
     )
 
 
-def trial(args) -> None:
+def trial(args: argparse.Namespace) -> None:
     from slopewalk.bench.sim.trial import run_trial
     from slopewalk.bench.sim.trial_spec import TrialSpec
     from slopewalk.planner.plan import plan_walk
@@ -159,7 +165,7 @@ def _distinct(outputs: dict) -> None:
         seen[key] = flag
 
 
-def optimize(args) -> None:
+def optimize(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments.ga.case import (
         optimize_case,
         pareto_csv,
@@ -210,7 +216,7 @@ def optimize(args) -> None:
     print("wrote " + ", ".join(str(p) for p in outputs))
 
 
-def fidelity(args) -> None:
+def fidelity(args: argparse.Namespace) -> None:
     from slopewalk.bench.report.fidelity import fidelity_report, read_tables
 
     check_output(args.out)
@@ -221,7 +227,7 @@ def fidelity(args) -> None:
     print(f"wrote {args.out}")
 
 
-def cop_error(args) -> None:
+def cop_error(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments.cop_error.report import cop_error_report
     from slopewalk.planner.spec import load_spec
 
@@ -232,7 +238,7 @@ def cop_error(args) -> None:
     print(f"wrote {args.out}")
 
 
-def compare(args) -> None:
+def compare(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments import compare as comparison
     from slopewalk.planner.spec import load_spec
 
@@ -258,7 +264,7 @@ def compare(args) -> None:
         raise SystemExit(1)
 
 
-def sweep(args) -> None:
+def sweep(args: argparse.Namespace) -> None:
     from pathlib import Path
 
     from slopewalk.bench.experiments.sweep.config import SweepError, load_sweep
@@ -284,7 +290,7 @@ def sweep(args) -> None:
         _write_claims(out, summary.table, envelope if envelope.exists() else None)
 
 
-def _batch_start(args, default_out, error: type[SlopewalkError]):
+def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkError]):
     """What ``sweep`` and ``envelope`` check before any job runs: ``--record`` can
     record, the output folder can be written. Returns (out, resume): ``resume`` is
     True with ``--resume``, None (resume an unfinished run found there) when ``--out``
@@ -302,7 +308,7 @@ def _batch_start(args, default_out, error: type[SlopewalkError]):
 
 
 @contextlib.contextmanager
-def _batch_executor(args):
+def _batch_executor(args: argparse.Namespace):
     """The Dask cluster of ``--cluster`` (None: local workers) for a resumable run;
     SIGINT or SIGTERM of the run exits with 128 + the signal, its message on stderr."""
     from slopewalk.bench.batch.run import Stopped
@@ -337,7 +343,7 @@ def _write_claims(results, sweep_table, envelope_table) -> None:
     print("wrote " + ", ".join(str(p.name) for p in written))
 
 
-def controllers(args) -> None:
+def controllers(args: argparse.Namespace) -> None:
     from slopewalk.bench.controllers import SHIPPED, ControllerError, load_controller
     from slopewalk.bench.experiments.controller_comparison import compare_controllers, report
     from slopewalk.bench.experiments.sweep.config import DEFAULT_SWEEP, load_sweep
@@ -381,7 +387,7 @@ def controllers(args) -> None:
     print(f"wrote {args.out}")
 
 
-def _envelope_gaits(args):
+def _envelope_gaits(args: argparse.Namespace):
     """The ``--envelope`` file checked now; a callable that returns its gait jobs."""
     from pathlib import Path
 
@@ -399,7 +405,7 @@ def _envelope_gaits(args):
     return lambda: jobs
 
 
-def envelope(args) -> None:
+def envelope(args: argparse.Namespace) -> None:
     from pathlib import Path
 
     from slopewalk.bench.experiments.envelope.config import EnvelopeError, load_envelope
@@ -447,7 +453,7 @@ def _envelope_report(out, table) -> None:
     _write_claims(results, results / "sweep.csv", table)
 
 
-def benchmark(args) -> None:
+def benchmark(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments import benchmark as benchmarks
 
     for name, value in benchmarks.run(args.what).items():
