@@ -15,6 +15,7 @@ FOLDERS = {"slopewalk": ROOT / "slopewalk", "slopewalk.planner": ROOT / "planner
            "slopewalk.bench": ROOT / "bench"}  # fmt: skip
 LAYERS = (  # (module prefix, layer): the longest matching prefix decides
     ("slopewalk.planner", 0),
+    ("slopewalk.bench.actuators", 1),
     ("slopewalk.bench.files", 1),
     ("slopewalk.bench.flags", 1),
     ("slopewalk.bench.controllers", 1),

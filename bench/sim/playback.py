@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.sim.contact import TrialSensors, add_trial_sensors, decode
 from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
 from slopewalk.bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
@@ -213,7 +214,7 @@ def play(
     plan: Plan,
     *,
     friction: float = 1.0,
-    actuators: str = "stiff",
+    actuators: str = DEFAULT_MODE,
     timestep: float = 0.001,
     settle: float = SETTLE_TIME,
     hold: float = HOLD_TIME,
@@ -225,7 +226,7 @@ def play(
     Args:
         plan: The analytic walk to play.
         friction: Coulomb μ of the feet on the plane, > 0.
-        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
+        actuators: A mode of ``bench.actuators.MODES``.
         timestep: Simulation step [s].
         settle, hold: Hold times before and after the walk [s].
         command_noise: σ of white noise added to every command row [rad] (``noisy``).
