@@ -21,8 +21,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from slopewalk.bench.sim.events import VERDICTS
 from slopewalk.bench.tables.table import TableFormat
 from slopewalk.bench.tables.table import text as _text
+from slopewalk.planner.verdict import PAPER_VERDICTS
 
 COLUMNS = (
     # inputs
@@ -65,8 +67,9 @@ COLUMNS = (
     "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
     "error",  # the one-line message of a trial that raised or killed its worker, else empty
 )
-ANALYTIC_VERDICTS = ("stable", "zmp_outside", "error")
-SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
+# a trial that raised has the verdicts "error"
+ANALYTIC_VERDICTS = (*PAPER_VERDICTS, "error")
+SIMULATED_VERDICTS = (*VERDICTS, "error")
 DECIMALS = {  # outcome columns: digits after the point (module doc)
     "first_event_time_s": 4,
     "zmp_rms_mm": 4,
