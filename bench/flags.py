@@ -11,11 +11,9 @@ from __future__ import annotations
 import argparse
 import math
 
+from slopewalk.bench.actuators import ACTUATOR_MODES, DEFAULT_MODE, MODES
 from slopewalk.planner import ranges
 from slopewalk.planner.ranges import Range
-
-# slopewalk.bench.sim.model's (a test keeps them equal)
-ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 
 
 class Parser(argparse.ArgumentParser):
@@ -194,9 +192,8 @@ def add_sim_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--actuators",
         choices=ACTUATOR_MODES,
-        default="stiff",
-        help="stiff: tracks the plan closely; servo: the spec's servo gains and limit; "
-        "_ff: the plan's torque fed forward",
+        default=DEFAULT_MODE,
+        help="; ".join(f"{m.name}: {m.description}" for m in MODES.values()),
     )
 
 

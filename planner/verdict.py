@@ -52,6 +52,8 @@ SLIP_DISTANCE = 0.005  # [m]
 LOADED_FRACTION = 0.10  # of the robot's weight
 TIP_ANGLE = np.deg2rad(5.0)  # [rad]
 
+# The paper's verdict: its ZMP test on the planned walk (``Plan.stable``).
+PAPER_VERDICTS = ("stable", "zmp_outside")
 PREDICTED_KINDS = ("joint_limit", "saturation", "tip", "strike", "slip", "foot_slide")
 VERDICT_KINDS = tuple(k for k in PREDICTED_KINDS if k != "saturation")
 SEVERITY = {kind: len(VERDICT_KINDS) - i for i, kind in enumerate(VERDICT_KINDS)}

@@ -123,3 +123,11 @@ def test_envelope_doc_names_every_family_and_its_columns():
 
 def test_readme_links_the_envelope_doc():
     assert f"]({ENVELOPE_DOC.relative_to(ROOT)})" in (ROOT / "README.md").read_text()
+
+
+def test_readme_flag_table_lists_the_registrys_actuator_modes():
+    from slopewalk.bench.actuators import ACTUATOR_MODES, DEFAULT_MODE
+
+    (row,) = [r for r in (ROOT / "README.md").read_text().splitlines() if r.startswith("| `--act")]
+    values, default = [cell.strip() for cell in row.split("|")[-3:-1]]
+    assert values == ", ".join(f"`{m}`" for m in ACTUATOR_MODES) and default == f"`{DEFAULT_MODE}`"

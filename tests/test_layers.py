@@ -2,7 +2,7 @@
 
 Every ``import`` counts, function-local ones included (a cycle held apart by a
 deferred import is still a cycle). Layers, lowest first (README, "What is here"):
-the planner; shared leaves of the bench (files, flags, controllers); the simulation;
+the planner; shared leaves of the bench (files, flags, actuators, controllers); the simulation;
 the tables runs write and reports read; the batch machinery; the experiments that run
 trials; the reports that read tables and write documents; the command line; the API.
 """
@@ -15,6 +15,7 @@ FOLDERS = {"slopewalk": ROOT / "slopewalk", "slopewalk.planner": ROOT / "planner
            "slopewalk.bench": ROOT / "bench"}  # fmt: skip
 LAYERS = (  # (module prefix, layer): the longest matching prefix decides
     ("slopewalk.planner", 0),
+    ("slopewalk.bench.actuators", 1),
     ("slopewalk.bench.files", 1),
     ("slopewalk.bench.flags", 1),
     ("slopewalk.bench.controllers", 1),

@@ -22,21 +22,24 @@ from typing import Any
 
 import numpy as np
 
+from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.files import atomic_path
 from slopewalk.bench.report import figures
 from slopewalk.bench.sim.model import servo_settings
+from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.verdict import PAPER_VERDICTS
 from slopewalk.planner.zmp import signed_margin
 
 NOMINAL_STEP_TIME = 1.0  # [s]
-SIM_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
+SIM_VERDICTS = SIMULATED_VERDICTS  # the sweep table's, "error" included
 
 
 def _line(rows, **where) -> list[dict]:
-    """Rows matching ``where`` (no mass scaling, stiff actuators unless asked), sorted."""
-    where = {"mass_scale": "", "actuators": "stiff", **where}
+    """Rows matching ``where`` (no mass scaling, the default actuators unless asked), sorted."""
+    where = {"mass_scale": "", "actuators": DEFAULT_MODE, **where}
     out = [r for r in rows if all(r.get(k) == v for k, v in where.items())]
     return sorted(out, key=lambda r: (r["step_time"], r["slope_deg"]))
 
@@ -206,7 +209,7 @@ def torque_claim(plan, result) -> dict:
             f"RMS {_rms(stance):.3f} vs {_rms(swing):.3f} N m (stance vs swing)"
         )
 
-    rotor = np.abs(plan.tau + servo_settings(plan.spec, "stiff").armature * plan.qdd)
+    rotor = np.abs(plan.tau + servo_settings(plan.spec, DEFAULT_MODE).armature * plan.qdd)
     return _claim(
         "stance joints carry more torque than swing joints",
         "stance-leg torques substantially higher",
@@ -379,7 +382,7 @@ def confusion(rows) -> str:
         "| analytic \\ simulated | " + " | ".join(SIM_VERDICTS) + " |",
         "|---|" + "---|" * len(SIM_VERDICTS),
     ]
-    for a in ("stable", "zmp_outside"):
+    for a in PAPER_VERDICTS:
         lines.append(
             f"| {a} | " + " | ".join(str(counts.get((a, s), 0)) for s in SIM_VERDICTS) + " |"
         )

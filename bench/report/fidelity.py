@@ -19,9 +19,17 @@ from pathlib import Path
 
 import numpy as np
 
+from slopewalk.bench.actuators import modes_where
 from slopewalk.bench.report.replicas import replica_section, trial_key, undecided
+from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
 from slopewalk.planner.errors import SlopewalkError
-from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, VERDICT_KINDS
+from slopewalk.planner.verdict import (
+    LOADED_FRACTION,
+    PAPER_VERDICTS,
+    SLIP_DISTANCE,
+    TIP_ANGLE,
+    VERDICT_KINDS,
+)
 
 VERDICTS = ("paper", "compliant", "predicted")
 _COLUMN = {
@@ -37,7 +45,7 @@ REQUIRED = (
     "compliant_min_margin_mm",
     "unplanned_support_s",
 )
-SIM_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
+SIM_VERDICTS = SIMULATED_VERDICTS  # the sweep table's, "error" included
 MARGIN_GOAL_MM = 5.0  # servo_ff goal: cells whose plan keeps this margin
 
 
@@ -101,7 +109,7 @@ def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> li
     if len(modes) > 1:
         lines += ["", "By actuator mode (predicted verdict): " + ", ".join(_by_mode(rows, modes))]
     lines += ["", "### Paper's verdict × simulated", ""]
-    lines += confusion_table(rows, "analytic_verdict", ("stable", "zmp_outside"))
+    lines += confusion_table(rows, "analytic_verdict", PAPER_VERDICTS)
     lines += ["", "### Predicted verdict × simulated", ""]
     lines += confusion_table(rows, "predicted_verdict", ("stable", *VERDICT_KINDS))
     lines += _goals(rows)
@@ -154,10 +162,9 @@ def confusion_table(rows, column, kinds) -> list[str]:
 
 def _goals(rows) -> list[str]:
     lines = []
+    stiff = modes_where(gains="stiff")
     flat = [
-        r
-        for r in rows
-        if r["step_time"] == 2.0 and r["slope_deg"] == 0 and r["actuators"] in ("stiff", "stiff_ff")
+        r for r in rows if r["step_time"] == 2.0 and r["slope_deg"] == 0 and r["actuators"] in stiff
     ]
     if flat:
         lines += ["", "Flat ground, 2 s steps: simulated CoP vs analytic ZMP (RMS, max), "
@@ -173,10 +180,11 @@ def _goals(rows) -> list[str]:
             "Taken apart by phase and cause (touch-down, the floor's give, the double "
             "support's foot slide): `slopewalk cop-error`, results/cop_error.md.",
         ]
+    servo_ff = modes_where(gains="spec", feedforward=True)  # the goal's modes
     ff = [
         r
         for r in rows
-        if r["actuators"] == "servo_ff"
+        if r["actuators"] in servo_ff
         and r["analytic_min_margin_mm"] >= MARGIN_GOAL_MM
         and "joint_limit" not in str(r["predicted_events"])
     ]
@@ -184,8 +192,8 @@ def _goals(rows) -> list[str]:
         walked = sum(_walks(r["simulated_verdict"]) for r in ff)
         lines += [
             "",
-            f"servo_ff on the cells whose plan keeps ≥ {MARGIN_GOAL_MM:g} mm margin within "
-            f"the joint limits: {walked}/{len(ff)} walk"
+            f"{', '.join(servo_ff)} on the cells whose plan keeps ≥ {MARGIN_GOAL_MM:g} mm "
+            f"margin within the joint limits: {walked}/{len(ff)} walk"
             + (
                 " ("
                 + "; ".join(
@@ -258,7 +266,8 @@ def cause_class(r) -> str:
     """
     walks = _walks(r["predicted_verdict"])
     rocked = np.rad2deg(TIP_ANGLE) / 5  # [deg] a turn that is there, not the floor's give
-    if walks and r["actuators"] == "servo" and r["compliant_min_margin_mm"] > 0:
+    servo = modes_where(gains="spec", feedforward=False)
+    if walks and r["actuators"] in servo and r["compliant_min_margin_mm"] > 0:
         return "servo sway"
     if walks and r["simulated_verdict"] == "slip" and r["simulated_max_tilt_deg"] > rocked:
         return "slip of a rocking sole"

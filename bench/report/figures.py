@@ -14,8 +14,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from slopewalk.bench.actuators import DEFAULT_MODE  # noqa: E402
 from slopewalk.bench.files import atomic_path  # noqa: E402
+from slopewalk.bench.sim.events import LOST, VERDICTS  # noqa: E402
 from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS  # noqa: E402
+from slopewalk.planner.verdict import PAPER_VERDICTS  # noqa: E402
 
 # One colour and one marker per outcome, so no two are told apart by hue alone: the
 # Okabe-Ito palette (distinct under the common colour-vision deficiencies) and shapes
@@ -29,10 +32,6 @@ _VERDICT_STYLE = {  # verdict: (colour, marker)
     "diverged": ("#0072B2", "X"),  # blue, cross
     "error": ("#999999", "x"),  # grey, thin cross
 }
-_ANALYTIC_VERDICTS = ("stable", "zmp_outside")
-_SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged")
-# Events after which the simulated CoP is no longer compared (bench/sim/trial.py).
-_LOST = ("tip", "fall", "diverged")
 
 
 def _style(verdict: str) -> tuple[str, str]:
@@ -42,7 +41,7 @@ def _style(verdict: str) -> tuple[str, str]:
 def stability_map(rows: list[dict], path: Path) -> Path:
     """Step time × slope, one panel per friction: inner filled marker = analytic verdict,
     outer open marker = simulated verdict (each outcome its own colour and shape)."""
-    rows = [r for r in rows if not r["mass_scale"] and r["actuators"] == "stiff"]
+    rows = [r for r in rows if not r["mass_scale"] and r["actuators"] == DEFAULT_MODE]
     frictions = sorted({r["friction"] for r in rows})
     fig, axes = plt.subplots(
         1,
@@ -68,8 +67,8 @@ def stability_map(rows: list[dict], path: Path) -> Path:
         ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("slope [deg]")
     for side, verdicts, filled, anchor in (
-        ("analytic (filled, inside)", _ANALYTIC_VERDICTS, True, (0.3, 1.0)),
-        ("simulated (open, outside)", _SIMULATED_VERDICTS, False, (0.65, 1.0)),
+        ("analytic (filled, inside)", PAPER_VERDICTS, True, (0.3, 1.0)),
+        ("simulated (open, outside)", VERDICTS, False, (0.65, 1.0)),
     ):
         fig.legend(
             handles=[_legend_marker(v, filled=filled) for v in verdicts],
@@ -217,7 +216,7 @@ def _case_title(plan, result, k: int, start: float, end: float) -> str:
 
 def _lost_note(result, start: float, end: float, *, any_cop: bool) -> str:
     """Why the simulated CoP is missing or cut short in [start, end] [s]; "" if it is not."""
-    lost = next((e for e in result.events if e.kind in _LOST), None)
+    lost = next((e for e in result.events if e.kind in LOST), None)
     if lost is None or lost.time > end:
         return "" if any_cop else "no simulated CoP: no foot on the plane"
     after = next((e for e in result.events if e.kind == "fall"), None)

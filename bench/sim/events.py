@@ -39,8 +39,9 @@ from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
 
 FALL_HEIGHT_FRACTION = 0.6  # of the planned hip height
 SATURATION = 0.99  # of the actuator's torque limit
-VERDICTS = ("stable", "slip", "tip", "fall", "diverged")
-_SEVERITY = {"slip": 1, "tip": 2, "fall": 3, "diverged": 4}
+VERDICTS = ("stable", "slip", "tip", "fall", "diverged")  # least severe first
+_SEVERITY = {kind: i for i, kind in enumerate(VERDICTS) if i}
+LOST = ("tip", "fall", "diverged")  # the robot did not walk on: no CoP compared after
 _FEET = ("left", "right")
 
 

@@ -30,6 +30,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from slopewalk.bench.actuators import ACTUATOR_MODES as ACTUATOR_MODES  # for existing callers
+from slopewalk.bench.actuators import DEFAULT_MODE, ActuatorMode, actuator_mode
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import MAX_SLOPE, GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
@@ -37,7 +39,6 @@ from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.ranges import FRICTION
 from slopewalk.planner.spec import JOINT_LIMIT_KEYS, RobotSpec, load_spec
 
-ACTUATOR_MODES = ("stiff", "servo", "stiff_ff", "servo_ff")
 _SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole
 _LEG_RADIUS = 0.015  # thigh/shank capsule radius [m] (AX-12A is 32 mm wide)
 
@@ -91,16 +92,25 @@ INTEGRATOR = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 IMPRATIO = 10.0
 
 
+def mode(actuators: str) -> ActuatorMode:
+    """The registered mode ``actuators`` (``bench.actuators.MODES``).
+
+    Raises:
+        SceneError: no such mode, in one line.
+    """
+    return actuator_mode(actuators, SceneError)
+
+
 def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
     """Joint and actuator settings of ``actuators`` mode for ``spec``.
 
-    "stiff" / "stiff_ff": kp 200, kv 2, 50 N m, the spec's armature; "servo" / "servo_ff":
-    every constant from the spec's [servo] table. "_ff" adds the torque feedforward.
+    Gains "stiff" (``ActuatorMode.gains``): kp 200, kv 2, 50 N m, the spec's armature;
+    "spec": every constant from the spec's [servo] table. A ``feedforward`` mode adds
+    the torque feedforward.
     """
-    if actuators not in ACTUATOR_MODES:
-        raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
-    feedforward = actuators.endswith("_ff")
-    if actuators.startswith("stiff"):
+    settings = mode(actuators)
+    feedforward = settings.feedforward
+    if settings.gains == "stiff":
         return Servo(
             kp=STIFF_KP,
             kv=STIFF_KV,
@@ -124,13 +134,12 @@ def check_scene_options(*, slope: float, friction: float, actuators: str, timest
     if not abs(slope) < MAX_SLOPE:
         raise SceneError(f"slope {np.rad2deg(slope):.4g} deg: must lie in (-60, 60) deg")
     FRICTION.check("friction", friction, SceneError)
-    if actuators not in ACTUATOR_MODES:
-        raise SceneError(f"actuators {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}")
+    mode(actuators)
     if not timestep > 0:
         raise SceneError(f"timestep {timestep!r} s: must be > 0")
 
 
-def robot_xml(spec: RobotSpec, *, actuators: str = "stiff") -> str:
+def robot_xml(spec: RobotSpec, *, actuators: str = DEFAULT_MODE) -> str:
     """MJCF text of the pelvis-rooted biped (see module doc)."""
     return compiled_xml(build_robot(spec, actuators=actuators))
 
@@ -149,7 +158,7 @@ def mujoco_message(err: Exception) -> str:
     return "; ".join(lines).removeprefix("Error: ") or "unknown error"
 
 
-def build_robot(spec: RobotSpec, *, actuators: str = "stiff") -> mujoco.MjSpec:
+def build_robot(spec: RobotSpec, *, actuators: str = DEFAULT_MODE) -> mujoco.MjSpec:
     """The pelvis-rooted biped as an ``MjSpec`` (``compile()`` it for full precision)."""
     mjs = _new_spec(spec.name)
     mjs.option.timestep, mjs.option.integrator = TIMESTEP, INTEGRATOR  # the stiff loop needs them
@@ -162,7 +171,7 @@ def scene_xml(
     *,
     slope: float = 0.0,
     friction: float = 1.0,
-    actuators: str = "stiff",
+    actuators: str = DEFAULT_MODE,
     timestep: float = TIMESTEP,
 ) -> str:
     """Self-contained MJCF text of the biped standing (``home`` key) on a tilted plane.
@@ -172,7 +181,7 @@ def scene_xml(
         slope: Plane inclination θs [rad] in (−60°, 60°); the plane turns about world y
             by −θs, so slope-frame x goes uphill. Gravity stays (0, 0, −9.81).
         friction: Coulomb friction coefficient μ of the foot-plane contact, > 0.
-        actuators: "stiff", "servo", "stiff_ff" or "servo_ff" (``servo_settings``).
+        actuators: A mode of ``ACTUATOR_MODES`` (``servo_settings``).
         timestep: Simulation step [s], > 0.
 
     Raises:

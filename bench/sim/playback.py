@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.sim.contact import TrialSensors, add_trial_sensors, decode
 from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
 from slopewalk.bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
@@ -213,7 +214,7 @@ def play(
     plan: Plan,
     *,
     friction: float = 1.0,
-    actuators: str = "stiff",
+    actuators: str = DEFAULT_MODE,
     timestep: float = 0.001,
     settle: float = SETTLE_TIME,
     hold: float = HOLD_TIME,
@@ -225,7 +226,7 @@ def play(
     Args:
         plan: The analytic walk to play.
         friction: Coulomb μ of the feet on the plane, > 0.
-        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
+        actuators: A mode of ``bench.actuators.MODES``.
         timestep: Simulation step [s].
         settle, hold: Hold times before and after the walk [s].
         command_noise: σ of white noise added to every command row [rad] (``noisy``).
@@ -284,30 +285,60 @@ def play_many(
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
         floor = SoftFloor.of_scene(model)
-        controls, aims, states, times = [], [], [], None
+        controls, aims, times = [], [], None
         for i in members:
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)
             if noise is not None:
                 q_ref = noisy(q_ref, *noise[i])
             controls.append(q_ref)
             aims.append(aim)
-            states.append(initial_state(model, plans[i]))
-        datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(members))))]
-        state, sensordata = rollout.rollout(model, datas, np.array(states), np.array(controls))
-        R_ws = rotation_slope_to_world(first.params.slope)
-        limit = servo.force_limit
-        for row, i in enumerate(members):
-            out[i] = recording_from_rollout(
-                model,
-                state[row],
-                sensordata[row],
-                times,
-                controls[row],
-                R_ws,
-                limit,
-                aim_offset=aims[row],
-            )
+        played = play_commands(
+            model,
+            [plans[i] for i in members],
+            controls,
+            times,
+            servo.force_limit,
+            aims=aims,
+            threads=threads,
+        )
+        out.update(zip(members, played, strict=True))
     return [out[i] for i in range(len(plans))]
+
+
+def play_commands(
+    model: mujoco.MjModel,
+    plans,
+    controls,
+    t: np.ndarray,
+    force_limit: float,
+    *,
+    aims=None,
+    threads: int = 1,
+) -> list[Recording]:
+    """Play each plan of one scene from its first pose (``initial_state``) with its command.
+
+    The one place a rollout becomes recordings: ``play_many`` and every player that
+    chooses its commands itself (``experiments/cop_error``) come through here.
+
+    Args:
+        model: The compiled scene of every plan (``build_model``), its slope theirs.
+        plans: The plans, all of the same length.
+        controls: Per plan its commands, MJCF order [rad], (m, 8) on the rows ``t`` [s].
+        force_limit: The actuators' torque limit [N m] (``Recording.force_limit``).
+        aims: Per plan ``Recording.aim_offset`` (m, 8) or None; None: None for every plan.
+        threads: MuJoCo threads the rollouts share.
+    """
+    aims = [None] * len(plans) if aims is None else aims
+    states = np.array([initial_state(model, plan) for plan in plans])
+    datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(plans))))]
+    state, sensordata = rollout.rollout(model, datas, states, np.array(controls))
+    R_ws = rotation_slope_to_world(plans[0].params.slope)
+    return [
+        recording_from_rollout(
+            model, state[row], sensordata[row], t, q_ref, R_ws, force_limit, aim_offset=aim
+        )
+        for row, (q_ref, aim) in enumerate(zip(controls, aims, strict=True))
+    ]
 
 
 def recording_from_rollout(

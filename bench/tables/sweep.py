@@ -10,6 +10,12 @@ torques to 1 µN·m, work to 0.1 µJ, ratios and fractions to 1e-6. ``nan`` is
 not-a-number, booleans are ``True``/``False``, a missing value an empty field;
 pandas and polars read the file as it is.
 
+``SPEC`` is the one list of the columns, each a ``Column``: where its value comes from
+(an input of the trial, an attribute of its ``TrialResult``, or a function of the result
+and its plan), its unit scale and its decimals; ``COLUMNS``, ``DECIMALS`` and
+``outcome_columns`` (a trial's row) derive from it. A new column is one ``Column`` here
+(and, as ever, the previous layout added to ``PREVIOUS_LAYOUTS``).
+
 ``SWEEP``, ``SWEEP_CONTROLLER`` and ``SWEEP_NOISE`` are the sweep's ``TableFormat``s
 (without, with a controller column, with a command-noise column); the module-level
 functions below are their methods. A finished table of an older version
@@ -19,74 +25,113 @@ the simulated tilt) is replaced by a fresh run (``--resume`` refuses it).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+from slopewalk.bench.sim.events import VERDICTS
 from slopewalk.bench.tables.table import TableFormat
 from slopewalk.bench.tables.table import text as _text
+from slopewalk.planner.verdict import PAPER_VERDICTS
 
-COLUMNS = (
+DEG = 180 / math.pi  # rad → deg: ``np.rad2deg``'s factor, bit for bit
+MM = 1e3  # m → mm
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of the sweep table: where its value comes from and how it is written.
+
+    Attributes:
+        name: The header's name.
+        source: None for an input (``SweepTrial.inputs``); an attribute of the trial's
+            ``TrialResult``; or a function (result, plan) → value.
+        scale: Unit factor applied to the source's value (e.g. ``MM``: m → mm), the
+            scaled value a float.
+        decimals: Digits after the point, for an outcome written at a fixed precision
+            (module doc); None: as ``table.text`` writes it.
+    """
+
+    name: str
+    source: str | Callable[[Any, Any], Any] | None = None
+    scale: float | None = None
+    decimals: int | None = None
+
+    def value(self, result, plan):
+        """This outcome column's value for a ``TrialResult`` and its ``Plan``."""
+        if self.source is None:
+            raise ValueError(f"{self.name}: an input, not an outcome")
+        if isinstance(self.source, str):
+            value = getattr(result, self.source)
+        else:
+            value = self.source(result, plan)
+        return value if self.scale is None else float(value * self.scale)
+
+
+def _kinds(events) -> str:
+    """Event kinds in order of first occurrence, ";"-joined."""
+    return ";".join(dict.fromkeys(e.kind for e in events))
+
+
+def _in_time(result) -> list:
+    return sorted(result.events, key=lambda e: e.time)
+
+
+def _first_time(result, _plan):
+    events = _in_time(result)
+    return float(events[0].time) if events else None
+
+
+SPEC = (
     # inputs
-    "trial_id",
-    "step_time",  # [s]
-    "slope_deg",
-    "friction",
-    "actuators",
-    "robot",
-    "mass_scale",  # "none", "legs=2", "all=10;legs=2"
-    "steps",
-    "seed",
+    Column("trial_id"),
+    Column("step_time"),  # [s]
+    Column("slope_deg"),
+    Column("friction"),
+    Column("actuators"),
+    Column("robot"),
+    Column("mass_scale"),  # "none", "legs=2", "all=10;legs=2"
+    Column("steps"),
+    Column("seed"),
     # outcome
-    "analytic_verdict",  # stable / zmp_outside, or error
-    "simulated_verdict",  # stable / tip / slip / fall / diverged, or error
-    "slip_predicted",
-    "events",  # kinds in order of first occurrence, ";"-joined
-    "first_event_time_s",
-    "zmp_rms_mm",
-    "zmp_max_mm",
-    "lipm_rms_mm",  # analytic multibody ZMP vs LIPM ZMP, RMS over the walk
-    "cop_lipm_rms_mm",  # simulated CoP vs LIPM ZMP, RMS while standing
-    "analytic_min_margin_mm",
-    "simulated_min_margin_mm",
-    "max_friction_ratio",
-    "simulated_max_friction_ratio",
-    "tracking_rms_deg",
-    "peak_torque_planned_Nm",
-    "peak_torque_simulated_Nm",
-    "work_J",  # planned joint work, Plan.work.sum()
-    "standing_fraction",
-    "sim_steps",
+    Column("analytic_verdict", "analytic_verdict"),  # ANALYTIC_VERDICTS
+    Column("simulated_verdict", "simulated_verdict"),  # SIMULATED_VERDICTS
+    Column("slip_predicted", lambda r, _: bool(r.slip_predicted)),
+    Column("events", lambda r, _: _kinds(_in_time(r))),  # kinds in order of first occurrence
+    Column("first_event_time_s", _first_time, decimals=4),
+    Column("zmp_rms_mm", "zmp_rms", MM, 4),
+    Column("zmp_max_mm", "zmp_max", MM, 4),
+    Column("lipm_rms_mm", "lipm_rms", MM, 4),  # analytic multibody ZMP vs LIPM ZMP, RMS
+    Column("cop_lipm_rms_mm", "cop_lipm_rms", MM, 4),  # simulated CoP vs LIPM ZMP, standing
+    Column("analytic_min_margin_mm", "analytic_min_margin", MM, 4),
+    Column("simulated_min_margin_mm", "simulated_min_margin", MM, 4),
+    Column("max_friction_ratio", "max_friction_ratio", decimals=6),
+    Column("simulated_max_friction_ratio", "simulated_max_friction_ratio", decimals=6),
+    Column("tracking_rms_deg", "tracking_rms", DEG, 5),
+    Column("peak_torque_planned_Nm", "peak_torque_planned", decimals=6),
+    Column("peak_torque_simulated_Nm", "peak_torque_simulated", decimals=6),
+    Column("work_J", lambda _, plan: float(plan.work.sum()), decimals=7),  # planned joint work
+    Column("standing_fraction", "standing_fraction", decimals=6),
+    Column("sim_steps", lambda r, _: int(r.sim_steps)),
     # fidelity (bench/sim/prediction.py, bench/sim/support.py)
-    "compliant_verdict",  # the paper's ZMP test on the walk the servos reach
-    "compliant_min_margin_mm",
-    "predicted_verdict",  # the most severe predicted event, or stable
-    "predicted_events",  # predicted kinds in order of first occurrence, ";"-joined
-    "predicted_rotation_deg",  # largest predicted turn of the support about its edge
-    "simulated_max_tilt_deg",  # largest simulated tilt of a loaded foot off the plane
-    "unplanned_support_s",  # foot-time the simulated contacts differed from the plan's
-    "error",  # the one-line message of a trial that raised or killed its worker, else empty
+    Column("compliant_verdict", "compliant_verdict"),  # the paper's test on the servos' walk
+    Column("compliant_min_margin_mm", "compliant_min_margin", MM, 4),
+    Column("predicted_verdict", "predicted_verdict"),  # the most severe predicted event
+    Column("predicted_events", lambda r, _: _kinds(r.predicted_events)),
+    Column("predicted_rotation_deg", "predicted_rotation", DEG, 5),  # of the support, largest
+    Column("simulated_max_tilt_deg", "simulated_max_tilt", DEG, 5),  # of a loaded foot, largest
+    Column("unplanned_support_s", "unplanned_support_s", decimals=4),  # foot-time off the plan
+    # the one-line message of a trial that raised or killed its worker, else empty
+    Column("error", lambda _r, _p: ""),
 )
-ANALYTIC_VERDICTS = ("stable", "zmp_outside", "error")
-SIMULATED_VERDICTS = ("stable", "slip", "tip", "fall", "diverged", "error")
-DECIMALS = {  # outcome columns: digits after the point (module doc)
-    "first_event_time_s": 4,
-    "zmp_rms_mm": 4,
-    "zmp_max_mm": 4,
-    "lipm_rms_mm": 4,
-    "cop_lipm_rms_mm": 4,
-    "analytic_min_margin_mm": 4,
-    "simulated_min_margin_mm": 4,
-    "max_friction_ratio": 6,
-    "simulated_max_friction_ratio": 6,
-    "tracking_rms_deg": 5,
-    "peak_torque_planned_Nm": 6,
-    "peak_torque_simulated_Nm": 6,
-    "work_J": 7,
-    "standing_fraction": 6,
-    "compliant_min_margin_mm": 4,
-    "unplanned_support_s": 4,
-    "predicted_rotation_deg": 5,
-    "simulated_max_tilt_deg": 5,
-}
+COLUMNS = tuple(c.name for c in SPEC)
+OUTCOMES = tuple(c for c in SPEC if c.source is not None)
+# a trial that raised has the verdicts "error"
+ANALYTIC_VERDICTS = (*PAPER_VERDICTS, "error")
+SIMULATED_VERDICTS = (*VERDICTS, "error")
+DECIMALS = {c.name: c.decimals for c in SPEC if c.decimals is not None}  # (module doc)
 HEADER = (",".join(COLUMNS) + "\n").encode()
 # A sweep that names a controller somewhere: one more input, last, so every other
 # column keeps its place ("none" for a trial played open loop).
@@ -169,6 +214,11 @@ def read_rows(
 ) -> dict[str, bytes]:
     """The rows of a finished sweep table (``parse``), by ``trial_id``."""
     return sweep_format(columns).read_rows(path, previous_ok=previous_ok)
+
+
+def outcome_columns(result, plan) -> dict:
+    """The outcome columns of a row (``OUTCOMES``) from a ``TrialResult`` and its ``Plan``."""
+    return {c.name: c.value(result, plan) for c in OUTCOMES}
 
 
 def verdicts(line: bytes) -> tuple[str, str]:

@@ -109,3 +109,19 @@ def test_servo_ff_lands_early_by_the_joints_dry_friction(plan):
     without = touch_downs(plan, simulate(plan, "servo_ff", joint_friction=False))[0]
     assert np.all(np.abs(without) <= 0.002)
     assert np.all(with_friction < -0.010)
+
+
+@pytest.mark.parametrize("actuators", ["stiff", "servo_ff"])
+def test_a_case_without_options_is_the_trials_own_playback(plan, actuators):
+    """cop_error plays through playback's path: with nothing chosen, ``simulate`` is
+    ``playback.play`` bit for bit (commands, aim, every sensor)."""
+    from slopewalk.bench.experiments.cop_error.flat_walk import FRICTION
+    from slopewalk.bench.sim.playback import play
+
+    own, trial = simulate(plan, actuators), play(plan, friction=FRICTION, actuators=actuators)
+    np.testing.assert_array_equal(own.t, trial.t)
+    np.testing.assert_array_equal(own.q_ref, trial.q_ref)
+    assert (own.aim_offset is None) == (trial.aim_offset is None) == (actuators == "stiff")
+    for name, value in vars(trial.sensors).items():
+        np.testing.assert_array_equal(getattr(own.sensors, name), value, err_msg=name)
+    assert own.diverged_at == trial.diverged_at and own.force_limit == trial.force_limit

@@ -97,3 +97,29 @@ def test_what_is_not_a_sweep_table_is_refused_and_left_alone(tmp_path, name):
 
 def test_columns_hold_no_wall_time():
     assert "wall_s" not in COLUMNS  # it differs run to run: the table would never be stable
+
+
+def test_the_column_spec_is_the_one_list_of_columns_and_decimals():
+    from slopewalk.bench.tables.sweep import OUTCOMES, SPEC
+
+    assert COLUMNS == tuple(c.name for c in SPEC) and len(set(COLUMNS)) == len(COLUMNS)
+    assert DECIMALS == {c.name: c.decimals for c in SPEC if c.decimals is not None}
+    assert set(DECIMALS) <= {c.name for c in OUTCOMES}  # inputs keep every digit
+    assert OUTCOMES[0].name == "analytic_verdict" and OUTCOMES[-1].name == "error"
+
+
+def test_a_committed_sweep_row_is_regenerated_byte_for_byte_from_its_trial():
+    """One trial of results/sweep.csv with events and predicted events (so every kind of
+    column source is exercised: attributes, unit scales, functions of result and plan),
+    replayed and written through the column spec: the committed line, every byte."""
+    from pathlib import Path
+
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+    from slopewalk.bench.experiments.sweep.run import run_one
+
+    root = Path(__file__).resolve().parents[2]
+    rows = SWEEP.read_rows(root / "results" / "sweep.csv")
+    trial_id = "bad9576af640"  # 0.4 s steps, μ 0.6: slip;tip simulated, tip;slip predicted
+    (trial,) = [t for t in load_sweep(root / "bench/experiments/sweeps/paper.toml").trials
+                if t.trial_id == trial_id]  # fmt: skip
+    assert format_row(run_one(trial)) == rows[trial_id]

@@ -1,20 +1,19 @@
 """One simulated flat walk for ``cop_error``: the command and the floor's feedforward chosen.
 
-``simulate`` plays a plan as ``playback.play`` does, with what the command answers
-chosen case by case: the floor's give and sink (``playback.floor_feedforward``) also
-in a mode without feedforward, terms of the loop's torque added as positions / kp
-(``lead_torque``), the joints' dry friction fed forward (``friction_sign``) or taken
-out of MuJoCo, and the contact's time constant and the time step. ``run_case``
-compares the walk with its plan as ``slopewalk trial`` does.
+``simulate`` plays a plan as ``playback.play`` does, through the same
+``playback.play_commands`` (its initial state, rollout and recording), with what the
+command answers chosen case by case: the floor's give and sink
+(``playback.floor_feedforward``) also in a mode without feedforward, terms of the
+loop's torque added as positions / kp (``lead_torque``), the joints' dry friction fed
+forward (``friction_sign``) or taken out of MuJoCo, and the contact's time constant and
+the time step. ``run_case`` compares the walk with its plan as ``slopewalk trial`` does.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
-from mujoco import rollout
 
 from slopewalk.bench.sim.floor import SoftFloor
 from slopewalk.bench.sim.model import Servo, servo_settings
@@ -25,15 +24,13 @@ from slopewalk.bench.sim.playback import (
     build_model,
     commands_and_aim,
     floor_feedforward,
-    initial_state,
     loop_torque,
     on_rows,
-    recording_from_rollout,
+    play_commands,
 )
 from slopewalk.bench.sim.trial import TrialResult, compare
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.joints import stance_swing_to_left_right
-from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import Plan
 
 STEP_TIME, FRICTION, STEPS = 2.0, 1.0, 4
@@ -126,19 +123,8 @@ def simulate(
     if floor_ff not in (None, own, "rigid"):
         aim = on_rows(t, plan, floor_feedforward(plan, floor, touchdown=floor_ff == "sink"))
         q_ref = q_ref + aim
-    state, sensordata = rollout.rollout(
-        model, mujoco.MjData(model), initial_state(model, plan), q_ref[None]
-    )
-    return recording_from_rollout(
-        model,
-        state[0],
-        sensordata[0],
-        t,
-        q_ref,
-        rotation_slope_to_world(plan.params.slope),
-        servo.force_limit,
-        aim_offset=aim,
-    )
+    (recording,) = play_commands(model, [plan], [q_ref], t, servo.force_limit, aims=[aim])
+    return recording
 
 
 def run_case(plan: Plan, actuators: str, label: str, **options) -> Case:

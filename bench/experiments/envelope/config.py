@@ -40,11 +40,11 @@ from pathlib import Path
 
 import numpy as np
 
+from slopewalk.bench.actuators import ACTUATOR_MODES, actuator_mode
 from slopewalk.bench.experiments.envelope.cell import FAMILIES, EnvelopeCell, SearchSettings
 from slopewalk.bench.experiments.sweep.config import SweepError, _body, _controller, _known, _number
 from slopewalk.bench.files import in_package
 from slopewalk.bench.flags import GENERATIONS, POPULATION, SEED
-from slopewalk.bench.sim.model import ACTUATOR_MODES
 from slopewalk.bench.tables.envelope import envelope_format
 from slopewalk.planner import ranges
 from slopewalk.planner.config_file import load_toml
@@ -147,10 +147,7 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
     )
     modes = _unique(_list(grid, "actuators", list(ACTUATOR_MODES), source))
     for mode in modes:
-        if mode not in ACTUATOR_MODES:
-            raise EnvelopeError(
-                f"{where}.actuators = {mode!r}: must be one of {', '.join(ACTUATOR_MODES)}"
-            )
+        actuator_mode(mode, EnvelopeError, f"{where}.actuators =")
     controllers = tuple(
         c
         for c in _unique(_controller(v, where) for v in _list(grid, "controller", [], source))

@@ -11,7 +11,7 @@ Format (degrees at this edge, like the CLI)::
     step_time = [1.0, 0.5]                 # [s], > 0 (1.0, the nominal step time)
     slope = [0, 10]                        # [deg], in (-60, 60) (0)
     friction = [0.6, 1.0]                  # Coulomb mu, > 0 (1.0)
-    actuators = ["stiff"]                  # "stiff", "servo", "stiff_ff", "servo_ff" ("stiff")
+    actuators = ["stiff"]                  # modes of slopewalk.bench.actuators.MODES ("stiff")
     robot = ["short_legs.toml"]            # spec files, relative to this file (the paper's biped)
     mass_scale = [{}, {all = 10}, {legs = 2}]   # per link-group factors, > 0 ({} = none)
     # ("none": open loop)
@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
+from slopewalk.bench.actuators import DEFAULT_MODE, actuator_mode
 from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
     AXES,
     TIMESTEP,
@@ -64,7 +65,6 @@ from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, 
     TrialSet,
     spec_text,
 )
-from slopewalk.bench.sim.model import ACTUATOR_MODES
 from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE_DEG
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SlopewalkError
@@ -78,7 +78,7 @@ DEFAULTS = {
     "step_time": 1.0,
     "slope": 0.0,
     "friction": 1.0,
-    "actuators": "stiff",
+    "actuators": DEFAULT_MODE,
     "robot": "default",
     "mass_scale": {},
     "controller": "none",
@@ -205,10 +205,7 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) ->
         slopes.append(slope)
     frictions = [_positive(v, "friction", "", where) for v in axes["friction"]]
     for actuators in axes["actuators"]:
-        if actuators not in ACTUATOR_MODES:
-            raise SweepError(
-                f"{where}.actuators = {actuators!r}: must be one of {', '.join(ACTUATOR_MODES)}"
-            )
+        actuator_mode(actuators, SweepError, f"{where}.actuators =")
     bodies = [
         _body(robot, _mass_scale(scale, where), robots, base_dir, where)
         for robot in axes["robot"]

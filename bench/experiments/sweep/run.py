@@ -43,12 +43,15 @@ from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
-
 from slopewalk.bench.batch.executor import one_line
 from slopewalk.bench.batch.run import Batch, Stopped, duration, run_batch
 from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepError, SweepTrial
-from slopewalk.bench.tables.sweep import SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE
+from slopewalk.bench.tables.sweep import (
+    SWEEP,
+    SWEEP_CONTROLLER,
+    SWEEP_NOISE,
+    outcome_columns,
+)
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -104,40 +107,6 @@ SWEEP_BATCH = Batch(
     unit="trials",
 )
 __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep", "open_cluster"]
-
-
-def outcome_columns(result, plan) -> dict:
-    """The outcome columns of a row (``tables.sweep.COLUMNS``) from a TrialResult and its Plan."""
-    events = sorted(result.events, key=lambda e: e.time)
-    return {
-        "analytic_verdict": result.analytic_verdict,
-        "simulated_verdict": result.simulated_verdict,
-        "slip_predicted": bool(result.slip_predicted),
-        "events": ";".join(dict.fromkeys(e.kind for e in events)),
-        "first_event_time_s": float(events[0].time) if events else None,
-        "zmp_rms_mm": result.zmp_rms * 1e3,
-        "zmp_max_mm": result.zmp_max * 1e3,
-        "lipm_rms_mm": result.lipm_rms * 1e3,
-        "cop_lipm_rms_mm": result.cop_lipm_rms * 1e3,
-        "analytic_min_margin_mm": result.analytic_min_margin * 1e3,
-        "simulated_min_margin_mm": result.simulated_min_margin * 1e3,
-        "max_friction_ratio": result.max_friction_ratio,
-        "simulated_max_friction_ratio": result.simulated_max_friction_ratio,
-        "tracking_rms_deg": float(np.rad2deg(result.tracking_rms)),
-        "peak_torque_planned_Nm": result.peak_torque_planned,
-        "peak_torque_simulated_Nm": result.peak_torque_simulated,
-        "work_J": float(plan.work.sum()),
-        "standing_fraction": result.standing_fraction,
-        "sim_steps": int(result.sim_steps),
-        "compliant_verdict": result.compliant_verdict,
-        "compliant_min_margin_mm": result.compliant_min_margin * 1e3,
-        "predicted_verdict": result.predicted_verdict,
-        "predicted_events": ";".join(dict.fromkeys(e.kind for e in result.predicted_events)),
-        "predicted_rotation_deg": float(np.rad2deg(result.predicted_rotation)),
-        "simulated_max_tilt_deg": float(np.rad2deg(result.simulated_max_tilt)),
-        "unplanned_support_s": result.unplanned_support_s,
-        "error": "",
-    }
 
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:

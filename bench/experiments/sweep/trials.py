@@ -19,6 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
+from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.gait import GaitParams
@@ -41,7 +42,7 @@ class SweepTrial:
         step_time: Step completion time [s].
         slope_deg: Plane inclination [deg].
         friction: Coulomb μ of the feet on the plane.
-        actuators: "stiff", "servo", "stiff_ff" or "servo_ff".
+        actuators: A mode of ``bench.actuators.MODES``.
         robot: The spec path as written in the file, or "default".
         mass_scale: (group, factor) pairs in file order; () = no scaling.
         steps: Steps per walk.
@@ -100,7 +101,7 @@ class SweepTrial:
     def label(self) -> str:
         """Short human description, e.g. ``T=0.5 s slope=0 mu=0.6``."""
         text = f"T={self.step_time:g} s slope={self.slope_deg:g} mu={self.friction:g}"
-        if self.actuators != "stiff":
+        if self.actuators != DEFAULT_MODE:
             text += f" {self.actuators}"
         if self.mass_scale:
             text += f" mass {self.mass_scale_text}"
