@@ -285,8 +285,8 @@ def play_many(
         model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
         floor = SoftFloor.of_scene(model)
-        controls, aims, times = [], [], None
-        for i in members:
+        controls, aims = [], []
+        for i in members:  # the members share a length, so one time base: the last one's
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)
             if noise is not None:
                 q_ref = noisy(q_ref, *noise[i])
