@@ -29,6 +29,7 @@ from slopewalk.bench.flags import (
     integer,
     number,
 )
+from slopewalk.bench.regenerate import add_regenerate_parser
 from slopewalk.planner import ranges
 from slopewalk.planner.errors import SlopewalkError
 
@@ -423,6 +424,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="what to measure",
     )
     p.set_defaults(run=commands.benchmark)
+
+    add_regenerate_parser(sub, _command)
     return parser
 
 
