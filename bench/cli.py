@@ -33,6 +33,7 @@ from slopewalk.bench.flags import (
     integer,
     number,
 )
+from slopewalk.bench.regenerate import add_regenerate_parser
 from slopewalk.planner import ranges
 from slopewalk.planner.errors import SlopewalkError
 
@@ -425,6 +426,7 @@ COMMANDS = (  # one builder per subcommand, in the order `slopewalk --help` list
     _cop_error_parser,
     _envelope_parser,
     _benchmark_parser,
+    lambda sub: add_regenerate_parser(sub, _command),
 )
 
 
