@@ -287,7 +287,7 @@ def sweep(args: argparse.Namespace) -> None:
         raise SweepError(f"{len(summary.lost)} trials lost with their workers; add --resume")
     if args.config is None or args.report:
         envelope = out / "envelope" / "envelope.csv"
-        _write_claims(out, summary.table, envelope if envelope.exists() else None)
+        _write_claims(out, summary.table, envelope if envelope.exists() else None, config)
 
 
 def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkError]):
@@ -322,24 +322,42 @@ def _batch_executor(args: argparse.Namespace):
         raise SystemExit(128 + stop.signum) from None
 
 
-def _write_claims(results, sweep_table, envelope_table) -> None:
+def _write_claims(results, sweep_table, envelope_table, config=None) -> None:
     """Write the claims table, confusion table and figures into ``results`` from the
-    sweep's table, with the envelope's claims when ``envelope_table`` is not None."""
+    sweep's table, with the envelope's claims when ``envelope_table`` is not None.
+
+    ``config``: the sweep file the table came from (its robots' specs; the report's
+    header names it unless it is the default sweep); None: the default sweep. The
+    GA's results are read from ``results/optimize/`` and the envelope from
+    ``results/envelope/``, beside the report, never from elsewhere: a report of a run
+    outside the repository says which of them it did not find there."""
+    from pathlib import Path
+
     from slopewalk.bench.experiments.claim_trials import claim_trials, play_ga_best
-    from slopewalk.bench.report.claims import ga_claims, write_report
+    from slopewalk.bench.experiments.sweep.config import DEFAULT_SWEEP, load_sweep
+    from slopewalk.bench.report.claims import DEFAULT_ROBOT, ga_claims, robots, write_report
     from slopewalk.bench.tables.table import read_table
     from slopewalk.planner.spec import load_spec
 
-    spec = load_spec()
+    rows = read_table(sweep_table)
+    if config is None and robots(rows) != [DEFAULT_ROBOT]:
+        print(f"claims not rewritten: {sweep_table} holds robots of a sweep file not named "
+              "here; run 'slopewalk sweep FILE --report' again")  # fmt: skip
+        return
+    config = config or load_sweep()
+    specs, trials = {}, {}
+    for name in robots(rows):
+        path = None if name == DEFAULT_ROBOT else Path(config.source).parent / name
+        specs[name] = load_spec(path)
+        played = [r for r in rows if r["robot"] == name and r["simulated_verdict"] != "error"]
+        trials[name] = claim_trials(specs[name], played)
     envelope = envelope_table and (read_table(envelope_table), envelope_table.relative_to(results))
+    ga = ga_claims(results / "optimize", specs[DEFAULT_ROBOT], play_ga_best) if (
+        DEFAULT_ROBOT in specs) else []  # fmt: skip
     written = write_report(
-        results,
-        read_table(sweep_table),
-        spec,
-        claim_trials(spec),
-        ga_claims(results / "optimize", spec, play_ga_best),
-        envelope=envelope,
-    )
+        results, rows, specs, trials, ga, envelope=envelope,
+        source=None if Path(config.source).resolve() == DEFAULT_SWEEP.resolve() else config.source,
+    )  # fmt: skip
     print("wrote " + ", ".join(str(p.name) for p in written))
 
 

@@ -1,10 +1,16 @@
 """The paper's claims, each checked analytically and in simulation; the confusion table.
 
-``write_report(out, rows, spec, trials)`` turns a sweep's rows (``sweep.csv``) into
+``write_report(out, rows, specs, trials)`` turns a sweep's rows (``sweep.csv``) into
 ``claims.md``, ``confusion.md`` and the figures of ``figures.py``. Where a claim
 needs more than the sweep holds (a trace, a torque split, the GA cases) it plans
 (no simulation), takes the walks ``experiments.claim_trials`` played, or reads the GA
 results written by ``slopewalk optimize`` into ``results/optimize/``.
+
+The report describes exactly the table it is given: one section per robot (the
+table's ``robot`` column) when the table holds another robot than the paper's, and
+each claim only where that robot's rows hold the cases it needs (e.g. the slope claim
+needs t_c = 1 s, μ = 1, stiff at 0°, 15°, 18°, 22.5°, 25° and 30°); else its row says
+``not in this sweep`` and which cases are missing, and quotes no number.
 
 Numbers are written at fixed precision (never ``%g`` of a computed value, whose
 digits follow floating-point noise: a ZMP shift of 1.39e-13 mm is 0.0000 mm), and
@@ -35,6 +41,27 @@ from slopewalk.planner.zmp import signed_margin
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 SIM_VERDICTS = SIMULATED_VERDICTS  # the sweep table's, "error" included
+DEFAULT_ROBOT = "default"  # the sweep table's ``robot`` for the paper's biped
+NOT_IN_SWEEP = "not in this sweep"
+STEP_TIME_CASES = (0.5, 0.4)  # [s], flat, μ = 1: the step-time claim's
+SLOPE_CASES = (0.0, 15.0, 18.0, 22.5, 25.0, 30.0)  # [deg], t_c = 1 s, μ = 1: the slope claim's
+DEFAULT_SOURCE = "the default sweep, `bench/experiments/sweeps/paper.toml`"
+
+
+def robots(rows) -> list[str]:
+    """The table's robots (its ``robot`` column), in the order of their first row."""
+    return list(dict.fromkeys(r.get("robot", DEFAULT_ROBOT) for r in rows))
+
+
+def _missing(line: list[dict], key: str, needed) -> list[float]:
+    """The values of ``needed`` that no row of ``line`` has as ``key``."""
+    have = {r[key] for r in line}
+    return [v for v in needed if v not in have]
+
+
+def _absent(claim: str, paper: str, needs: str, evidence: str = "-") -> dict:
+    """A claim whose cases this sweep does not hold: no number, the cases it needs."""
+    return _claim(claim, paper, f"{NOT_IN_SWEEP}: needs {needs}", "-", NOT_IN_SWEEP, evidence)
 
 
 def _line(rows, **where) -> list[dict]:
@@ -65,8 +92,24 @@ def _claim(claim, paper, analytic, simulated, agree, evidence) -> dict:
     }
 
 
+STEP_TIME_CLAIM = (
+    "flat ground: stable down to 0.5 s, not at 0.4 s",
+    "stable for t_c ≥ 0.5 s; ZMP almost entirely outside at 0.4 s",
+)
+SLOPE_CLAIM = (
+    "slopes: inside up to 15°, towards the rear at 18° and 22.5°, outside beyond 22.5°",
+    "inside ≤ 15°; rear edge at 18°, 22.5°; outside > 22.5°",
+)
+
+
 def step_time_claim(rows) -> dict:
     flat = _line(rows, slope_deg=0.0, friction=1.0)
+    if missing := _missing(flat, "step_time", STEP_TIME_CASES):
+        return _absent(
+            *STEP_TIME_CLAIM,
+            f"flat ground, μ = 1, stiff, t_c = {_fmt_list(STEP_TIME_CASES)} s "
+            f"(missing {_fmt_list(missing)} s)",
+        )
     ok_a = [r["step_time"] for r in flat if r["analytic_verdict"] == "stable"]
     ok_s = [r["step_time"] for r in flat if r["simulated_verdict"] == "stable"]
     by_t = {r["step_time"]: r for r in flat}
@@ -78,8 +121,7 @@ def step_time_claim(rows) -> dict:
         )
 
     return _claim(
-        "flat ground: stable down to 0.5 s, not at 0.4 s",
-        "stable for t_c ≥ 0.5 s; ZMP almost entirely outside at 0.4 s",
+        *STEP_TIME_CLAIM,
         f"ZMP inside the polygon at t_c = {_fmt_list(ok_a)} s; min margin at 0.5 s "
         f"{by_t.get(0.5, {}).get('analytic_min_margin_mm', float('nan')):.1f} mm",
         f"no tip/slip/fall at t_c = {_fmt_list(ok_s)} s (μ = 1)",
@@ -90,6 +132,12 @@ def step_time_claim(rows) -> dict:
 
 def slope_claim(rows, spec: RobotSpec) -> dict:
     line = _line(rows, step_time=NOMINAL_STEP_TIME, friction=1.0)
+    if missing := _missing(line, "slope_deg", SLOPE_CASES):
+        return _absent(
+            *SLOPE_CLAIM,
+            f"t_c = {NOMINAL_STEP_TIME:g} s, μ = 1, stiff at slopes {_fmt_list(SLOPE_CASES)}° "
+            f"(missing {_fmt_list(missing)}°)",
+        )
     inside = [r["slope_deg"] for r in line if r["analytic_verdict"] == "stable"]
     stable = [r["slope_deg"] for r in line if r["simulated_verdict"] == "stable"]
     rear = []
@@ -104,8 +152,7 @@ def slope_claim(rows, spec: RobotSpec) -> dict:
         return {15.0, 18.0, 22.5} <= set(ok) and not {25.0, 30.0} & set(ok)
 
     return _claim(
-        "slopes: inside up to 15°, towards the rear at 18° and 22.5°, outside beyond 22.5°",
-        "inside ≤ 15°; rear edge at 18°, 22.5°; outside > 22.5°",
+        *SLOPE_CLAIM,
         f"inside at {_fmt_list(inside)}°; mean SSP ZMP x from the ankle [mm]: {'; '.join(rear)}",
         f"stable at {_fmt_list(stable)}° (μ = 1)",
         _yes(agrees(inside), agrees(stable)),
@@ -113,38 +160,49 @@ def slope_claim(rows, spec: RobotSpec) -> dict:
     )
 
 
+MASS_CASES = (  # (mass_scale, claim, paper)
+    ("all=10", "10× mass on every link leaves the ZMP unchanged", "ZMP trace unchanged"),
+    ("legs=2", "doubling the swing-leg mass pushes the ZMP outside", "ZMP outside the polygon"),
+)
+
+
 def mass_claims(rows, spec: RobotSpec) -> list[dict]:
+    """The paper's mass cases at t_c = 1 s on flat ground, each where the sweep holds it."""
     base = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
+    nominal = _line(rows, step_time=NOMINAL_STEP_TIME, slope_deg=0.0)
+    same = {r["friction"]: r["simulated_verdict"] for r in nominal}
     out = []
-    for scale, claim, paper in (
-        ("all=10", "10× mass on every link leaves the ZMP unchanged", "ZMP trace unchanged"),
-        ("legs=2", "doubling the swing-leg mass pushes the ZMP outside", "ZMP outside the polygon"),
-    ):
-        group, factor = scale.split("=")
-        scaled = spec.with_mass_scale({group: float(factor)})
-        plan = plan_walk(scaled, base.params)
-        shift = np.hypot(*(plan.zmp - base.zmp).T).max() * 1e3
-        sim = [r for r in rows if r["mass_scale"] == scale]
-        sim_text = (
-            ", ".join(
-                f"{r['simulated_verdict']} (μ {r['friction']:g}, RMS {r['zmp_rms_mm']:.1f} mm)"
-                for r in sim
+    for scale, claim, paper in MASS_CASES:
+        sim = _line(rows, step_time=NOMINAL_STEP_TIME, slope_deg=0.0, mass_scale=scale)
+        if not sim:
+            out.append(
+                _absent(
+                    claim,
+                    paper,
+                    f"t_c = {NOMINAL_STEP_TIME:g} s on flat ground, stiff, with "
+                    f"mass_scale {{{scale.replace('=', ' = ')}}}",
+                )
             )
-            or "not in the sweep"
+            continue
+        group, factor = scale.split("=")
+        plan = plan_walk(spec.with_mass_scale({group: float(factor)}), base.params)
+        shift = np.hypot(*(plan.zmp - base.zmp).T).max() * 1e3
+        sim_text = ", ".join(
+            f"{r['simulated_verdict']} (μ {r['friction']:g}, RMS {r['zmp_rms_mm']:.1f} mm)"
+            for r in sim
         )
-        nominal = [r for r in _line(rows, step_time=NOMINAL_STEP_TIME, slope_deg=0.0)]
-        same = {r["friction"]: r["simulated_verdict"] for r in nominal}
+        compared = all(r["friction"] in same for r in sim)  # the nominal masses at that μ
         if scale == "all=10":  # unchanged: same verdict as the nominal masses at that μ
             agree = _yes(
                 shift < 1e-6,
-                all(same.get(r["friction"]) == r["simulated_verdict"] for r in sim)
-                if sim
+                all(same[r["friction"]] == r["simulated_verdict"] for r in sim)
+                if compared
                 else None,
             )
         else:  # pushed out: unstable where the nominal masses were stable
             agree = _yes(
                 plan.margin.min() < 0 <= base.margin.min(),
-                all(r["simulated_verdict"] != "stable" for r in sim) if sim else None,
+                all(r["simulated_verdict"] != "stable" for r in sim),
             )
         out.append(
             _claim(
@@ -166,33 +224,63 @@ def mass_claims(rows, spec: RobotSpec) -> list[dict]:
     return out
 
 
-def lipm_claim(rows, spec: RobotSpec, out: Path) -> dict:
+LIPM_CLAIM = (
+    "LIPM matches the multibody ZMP at slow steps and diverges at fast ones",
+    "near-identical at low acceleration; at short t_c the 8-DOF model is unstable while "
+    "the LIPM still predicts stability",
+)
+
+
+def lipm_series(rows) -> tuple[list[float], list[float], list[float]]:
+    """Step times [s] of the flat μ = 1 rows and their LIPM RMS distances [mm]:
+    (step times, multibody ZMP to LIPM, simulated CoP to LIPM), fastest first."""
     flat = _line(rows, slope_deg=0.0, friction=1.0)
-    times = [r["step_time"] for r in flat]
-    analytic = [r.get("lipm_rms_mm", np.nan) for r in flat]
-    simulated = [r.get("cop_lipm_rms_mm", np.nan) for r in flat]
-    figures.lipm_vs_step_time(times, analytic, simulated, out / "lipm_vs_step_time.png")
-    fast = plan_walk(spec, GaitParams.nominal(spec, 0.4))
+    return (
+        [r["step_time"] for r in flat],
+        [r.get("lipm_rms_mm", np.nan) for r in flat],
+        [r.get("cop_lipm_rms_mm", np.nan) for r in flat],
+    )
+
+
+def lipm_claim(rows, spec: RobotSpec) -> dict:
+    """LIPM vs multibody ZMP from the slowest to the fastest flat step of the sweep."""
+    times, analytic, simulated = lipm_series(rows)
+    if len(times) < 2:
+        return _absent(
+            *LIPM_CLAIM,
+            f"flat ground, μ = 1, stiff at two step times or more (this sweep: "
+            f"{_fmt_list(times)} s)",
+        )
+    fastest = times[0]
+    fast = plan_walk(spec, GaitParams.nominal(spec, fastest))
     lipm_margin = signed_margin(fast.zmp_lipm, fast.polygon).min() * 1e3
     text = ", ".join(f"{t:g} s: {a:.1f}" for t, a in zip(times, analytic, strict=True))
-    grows = len(analytic) > 1 and analytic[0] > 5 * analytic[-1]
+    grows = analytic[0] > 5 * analytic[-1]
     return _claim(
-        "LIPM matches the multibody ZMP at slow steps and diverges at fast ones",
-        "near-identical at low acceleration; at short t_c the 8-DOF model is unstable while "
-        "the LIPM still predicts stability",
-        f"RMS distance ZMP to LIPM [mm]: {text}; at 0.4 s the LIPM ZMP's min margin is "
+        *LIPM_CLAIM,
+        f"RMS distance ZMP to LIPM [mm]: {text}; at {fastest:g} s the LIPM ZMP's min margin is "
         f"{lipm_margin:.0f} mm (multibody {fast.margin.min() * 1e3:.0f} mm)",
         "RMS distance CoP to LIPM [mm]: "
         + ", ".join(f"{t:g} s: {s:.1f}" for t, s in zip(times, simulated, strict=True)),
         (
-            "partly: analytic, the distance grows with speed but at 0.4 s the LIPM ZMP is outside "
-            "too"
+            f"partly: analytic, the distance grows with speed but at {fastest:g} s the LIPM "
+            "ZMP is outside too"
             if grows and lipm_margin < 0
             else _yes(grows, None).split(",")[0]
         )
-        + "; simulated CoP vs LIPM grows too",
+        + (
+            "; simulated CoP vs LIPM grows too"
+            if simulated[0] > simulated[-1]
+            else "; simulated CoP vs LIPM does not grow"
+        ),
         "lipm_vs_step_time.png",
     )
+
+
+TORQUE_CLAIM = (
+    "stance joints carry more torque than swing joints",
+    "stance-leg torques substantially higher",
+)
 
 
 def torque_claim(plan, result) -> dict:
@@ -211,8 +299,7 @@ def torque_claim(plan, result) -> dict:
 
     rotor = np.abs(plan.tau + servo_settings(plan.spec, DEFAULT_MODE).armature * plan.qdd)
     return _claim(
-        "stance joints carry more torque than swing joints",
-        "stance-leg torques substantially higher",
+        *TORQUE_CLAIM,
         text(tau[:, :4], tau[:, 4:]),
         text(np.where(stance_right, right, left), np.where(stance_right, left, right))
         + "; the servos' reflected rotor inertia (armature, which the paper's Newton-Euler "
@@ -240,13 +327,16 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> 
     """
     reports = _optimize_reports(optimize_dir)
     if not reports:
+        where = Path(optimize_dir).name
         return [
             _claim(
                 "GA cases (22.5°, 30°)",
                 "see below",
-                f"no `slopewalk optimize` results in {optimize_dir}",
+                f"not checked: no `slopewalk optimize` reports in `{where}/` beside this "
+                f"report (this table reads the GA's results from there, e.g. `slopewalk "
+                f"optimize --slope 22.5 --out {where}/slope22.5.json`; it plays none itself)",
                 "-",
-                "not checked",
+                "not checked: no GA results",
                 "-",
             )
         ]
@@ -438,29 +528,119 @@ def _predicted_confusion(rows) -> list[str]:
 def write_report(
     out: str | Path,
     rows: list[dict],
-    spec: RobotSpec,
-    trials: Any,
+    specs: dict[str, RobotSpec],
+    trials: dict[str, Any],
     ga_claims: list[dict] | None = None,
     *,
     envelope: tuple[list[dict], Path] | None = None,
+    source: str | None = None,
 ) -> list[Path]:
     """Write claims.md, confusion.md and the figures into ``out``; return the paths.
 
-    ``trials``: the walks the figures show (``experiments.claim_trials.claim_trials``).
-    Rows of trials that raised (verdict ``error``) are left out. ``envelope``: the
-    rows of an envelope table and its path as cited from ``out``; claims 1 and 2
-    then come from it first (``envelope_claims``), the GA rows cite its cells, and
-    the sweep's claims are labelled as those of one hand-picked gait.
+    ``specs`` and ``trials``: each robot of the table (its ``robot`` column) by name,
+    its spec and the walks its figures show (``experiments.claim_trials.claim_trials``,
+    played only for the cases the table holds). Rows of trials that raised (verdict
+    ``error``) are left out. ``ga_claims`` and ``envelope`` (the rows of an envelope
+    table and its path as cited from ``out``) are the paper's robot's: they go in the
+    ``default`` robot's section; with ``envelope`` claims 1 and 2 come from it first
+    (``envelope_claims``), the GA rows cite its cells, and the sweep's claims are
+    labelled as those of one hand-picked gait. ``source``: the sweep file the table
+    came from, as the user named it; None: the default sweep. With one robot, the
+    paper's, the claims are one table; else one section per robot, each figure of a
+    walk one file per robot (``zmp_traces_<robot>.png``).
     """
     out = Path(out)
     rows = [r for r in rows if "error" not in (r["analytic_verdict"], r["simulated_verdict"])]
+    names = robots(rows)
+    sectioned = names != [DEFAULT_ROBOT]
     written = [figures.stability_map(rows, out / "stability_map.png")]
-    written.append(figures.zmp_traces(trials.cases, out / "zmp_traces.png"))
-    nominal, nominal_result = trials.nominal, trials.nominal_result
-    written.append(figures.joint_torques(nominal, nominal_result, out / "joint_torques.png"))
-    written.append(figures.joint_angles(nominal, nominal_result, out / "joint_angles.png"))
+    series = {name: lipm_series([r for r in rows if r.get("robot", DEFAULT_ROBOT) == name])
+              for name in names}  # fmt: skip
+    if any(times for times, _, _ in series.values()):
+        labelled = {(name if sectioned else None): s for name, s in series.items() if s[0]}
+        written.append(figures.lipm_vs_step_time(labelled, out / "lipm_vs_step_time.png"))
+    sections, every = [], []
+    for name in names:
+        suffix = f"_{_slug(name, names)}" if sectioned else ""
+        mine = [r for r in rows if r.get("robot", DEFAULT_ROBOT) == name]
+        claims, files = _robot_claims(
+            out, mine, specs[name], trials[name], suffix,
+            ga_claims if name == DEFAULT_ROBOT else None,
+            envelope if name == DEFAULT_ROBOT else None,
+        )  # fmt: skip
+        written += files
+        hz = GaitParams.nominal(specs[name], NOMINAL_STEP_TIME)
+        nominal = (
+            f"Nominal gait unless stated: Hz = {hz.hip_height:.2f} m, lift 0.6 × thigh, tilt "
+            f"{np.rad2deg(hz.tilt):g}°, `hold` profile, stiff actuators."
+        )
+        if sectioned:
+            sections += ["", f"## Robot `{name}` ({specs[name].name})", "", nominal, ""]
+            every += [{**c, "robot": name} for c in claims]
+        else:
+            sections += [nominal, ""]
+            every += claims
+        sections += _table(claims)
+    table = ["# The paper's claims, analytic and simulated", "", _header(source, envelope, rows)]
+    if DEFAULT_ROBOT not in names and (ga_claims or envelope is not None):
+        table.append(
+            "The GA cases and the envelope are the paper's robot's (`default`), which this "
+            "sweep does not hold: not in this sweep."
+        )
+    table += sections
+    for name, text in (("claims.md", "\n".join(table) + "\n"), ("confusion.md", confusion(rows))):
+        with atomic_path(out / name) as tmp:
+            tmp.write_text(text)
+        written.append(out / name)
+    with atomic_path(out / "claims.json") as tmp:
+        tmp.write_text(json.dumps(every, indent=2))
+    return [*written, out / "claims.json"]
+
+
+def _header(source: str | None, envelope, rows) -> str:
+    """Where the table came from: the sweep file (and the envelope's table)."""
+    if source is None:
+        head = f"Regenerated by `slopewalk sweep` ({DEFAULT_SOURCE})"
+    else:
+        head = (
+            f"Written by `slopewalk sweep --report` from the sweep file `{source}` "
+            f"({len(rows)} trials of `sweep.csv`, robots: "
+            + ", ".join(f"`{name}`" for name in robots(rows))
+            + ")"
+        )
+    if envelope is not None:
+        return head + (
+            f"; the envelope's rows from `{envelope[1]}` (`slopewalk envelope`, "
+            "`bench/experiments/envelopes/paper.toml`: the GA's best gait per cell)."
+        )
+    return head + (
+        ". No envelope table at `envelope/envelope.csv` beside this report (`slopewalk "
+        "envelope` writes it into `results/envelope/`): its claims are not included."
+    )
+
+
+def _robot_claims(out: Path, rows, spec, trials, suffix: str, ga_rows, envelope):
+    """One robot's claims and the figures of its walks: (claims, files written)."""
+    files = []
+    zmp_name, torques_name = f"zmp_traces{suffix}.png", f"joint_torques{suffix}.png"
+    if trials.cases:
+        files.append(figures.zmp_traces(trials.cases, out / zmp_name))
+    if trials.nominal is not None:
+        files.append(
+            figures.joint_torques(trials.nominal, trials.nominal_result, out / torques_name)
+        )
+        files.append(
+            figures.joint_angles(
+                trials.nominal, trials.nominal_result, out / f"joint_angles{suffix}.png"
+            )
+        )
+        torque = torque_claim(trials.nominal, trials.nominal_result)
+    else:
+        torque = _absent(
+            *TORQUE_CLAIM, f"t_c = {NOMINAL_STEP_TIME:g} s on flat ground, μ = 1, stiff"
+        )
     nominal_claims = [step_time_claim(rows), slope_claim(rows, spec)]
-    ga_rows = list(ga_claims or [])
+    ga_rows = list(ga_rows or [])
     found = []
     if envelope is not None:
         from slopewalk.bench.report.envelope_claims import envelope_cell_note, envelope_claims
@@ -479,36 +659,37 @@ def write_report(
         *nominal_claims,
         *ga_rows,
         *mass_claims(rows, spec),
-        lipm_claim(rows, spec, out),
-        torque_claim(nominal, nominal_result),
+        lipm_claim(rows, spec),
+        torque,
     ]
-    written.append(out / "lipm_vs_step_time.png")
-    table = [
-        "# The paper's claims, analytic and simulated",
-        "",
-        "Regenerated by `slopewalk sweep` "
-        "(the default sweep, `bench/experiments/sweeps/paper.toml`)"
-        + (
-            f"; the envelope's rows from `{envelope[1]}` (`slopewalk envelope`, "
-            "`bench/experiments/envelopes/paper.toml`: the GA's best gait per cell)."
-            if envelope is not None
-            else "."
-        ),
-        f"Nominal gait unless stated: Hz = {nominal.params.hip_height:.2f} m, lift 0.6 × "
-        f"thigh, tilt {np.rad2deg(nominal.params.tilt):g}°, `hold` profile, stiff actuators.",
-        "",
+    for c in claims:  # this robot's figures
+        c["evidence"] = (
+            c["evidence"]
+            .replace("zmp_traces.png", zmp_name)
+            .replace("joint_torques.png", torques_name)
+        )
+    return claims, files
+
+
+def _table(claims: list[dict]) -> list[str]:
+    return [
         "| claim | paper | analytic here | simulated here | bears the paper out? | shown in |",
         "|---|---|---|---|---|---|",
-    ]
-    table += [
+    ] + [
         f"| {c['claim']} | {c['paper']} | {c['analytic']} | {c['simulated']} | "
         f"{c['agree']} | {c['evidence']} |"
         for c in claims
     ]
-    for name, text in (("claims.md", "\n".join(table) + "\n"), ("confusion.md", confusion(rows))):
-        with atomic_path(out / name) as tmp:
-            tmp.write_text(text)
-        written.append(out / name)
-    with atomic_path(out / "claims.json") as tmp:
-        tmp.write_text(json.dumps(claims, indent=2))
-    return [*written, out / "claims.json"]
+
+
+def _slug(name: str, names: list[str]) -> str:
+    """A file-name part for robot ``name``, unique among ``names`` (``robots/big.toml``:
+    ``robots_big``; two names that give the same part get their position added)."""
+    base = _slug_base(name)
+    clash = any(_slug_base(other) == base for other in names if other != name)
+    return f"{base}{names.index(name) + 1}" if clash else base
+
+
+def _slug_base(name: str) -> str:
+    stem = name[: -len(".toml")] if name.endswith(".toml") else name
+    return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in stem).strip("_") or "robot"

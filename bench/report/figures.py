@@ -38,49 +38,73 @@ def _style(verdict: str) -> tuple[str, str]:
     return _VERDICT_STYLE.get(verdict, _VERDICT_STYLE["error"])
 
 
+LEGENDS_SIDE_BY_SIDE = 9.0  # [in]: a figure narrower than this stacks its two legends
+MAP_PANEL_HEIGHT = 3.6  # [in], one row of panels of the stability map
+STACKED_LEGENDS = 1.35  # [in] above the panels for the two legends one over the other
+
+
 def stability_map(rows: list[dict], path: Path) -> Path:
-    """Step time × slope, one panel per friction: inner filled marker = analytic verdict,
-    outer open marker = simulated verdict (each outcome its own colour and shape)."""
+    """Step time × slope, one panel per friction and one row of panels per robot (the
+    table's ``robot`` column): inner filled marker = analytic verdict, outer open marker =
+    simulated verdict (each outcome its own colour and shape). The two legends sit side by
+    side above a wide figure, one over the other above a narrow one, never on each other."""
     rows = [r for r in rows if not r["mass_scale"] and r["actuators"] == DEFAULT_MODE]
     frictions = sorted({r["friction"] for r in rows})
+    names = list(dict.fromkeys(r.get("robot", "default") for r in rows)) or ["default"]
+    labelled = names != ["default"]
+    width = 4.2 * max(1, len(frictions))
+    stacked = width < LEGENDS_SIDE_BY_SIDE
+    if stacked:
+        width = max(width, 5.6)  # the simulated legend's five entries in one line
+        height = MAP_PANEL_HEIGHT * len(names) + STACKED_LEGENDS
+        top = 1 - STACKED_LEGENDS / height
+    elif len(names) == 1:
+        height, top = 4.3, 0.84
+    else:
+        height = MAP_PANEL_HEIGHT * len(names) + 0.7
+        top = 1 - 0.7 / height
     fig, axes = plt.subplots(
-        1,
-        max(1, len(frictions)),
-        figsize=(4.2 * max(1, len(frictions)), 4.3),
-        sharey=True,
-        squeeze=False,
+        len(names), max(1, len(frictions)), figsize=(width, height), sharey=True, squeeze=False
     )
-    for ax, mu in zip(axes[0], frictions, strict=False):
-        for r in (r for r in rows if r["friction"] == mu):
-            colour, marker = _style(r["simulated_verdict"])
-            ax.scatter(
-                r["step_time"], r["slope_deg"], s=190, marker=marker, facecolors="white",
-                edgecolors=colour, linewidths=2.2, zorder=2,
-            )  # fmt: skip
-            colour, marker = _style(r["analytic_verdict"])
-            ax.scatter(
-                r["step_time"], r["slope_deg"], s=38, marker=marker, c=colour,
-                edgecolors="none", zorder=3,
-            )  # fmt: skip
-        ax.set_title(f"μ = {mu:g}")
-        ax.set_xlabel("step time [s]")
-        ax.grid(alpha=0.3)
-    axes[0, 0].set_ylabel("slope [deg]")
-    for side, verdicts, filled, anchor in (
+    for row_axes, name in zip(axes, names, strict=True):
+        mine = [r for r in rows if r.get("robot", "default") == name]
+        for ax, mu in zip(row_axes, frictions, strict=False):
+            _map_panel(ax, [r for r in mine if r["friction"] == mu])
+            ax.set_title(f"robot {name}, μ = {mu:g}" if labelled else f"μ = {mu:g}")
+        row_axes[0].set_ylabel(f"{name}\nslope [deg]" if labelled else "slope [deg]")
+    legends = (
         ("analytic (filled, inside)", PAPER_VERDICTS, True, (0.3, 1.0)),
         ("simulated (open, outside)", VERDICTS, False, (0.65, 1.0)),
-    ):
+    )
+    for k, (side, verdicts, filled, anchor) in enumerate(legends):
         fig.legend(
             handles=[_legend_marker(v, filled=filled) for v in verdicts],
             loc="upper center",
-            bbox_to_anchor=anchor,
+            bbox_to_anchor=(0.5, 1.0 - k * 0.62 / height) if stacked else anchor,
             ncol=len(verdicts),
             fontsize=8,
             title=side,
             title_fontsize=8,
         )
-    fig.tight_layout(rect=(0, 0, 1, 0.84))
+    fig.tight_layout(rect=(0, 0, 1, top))
     return _save(fig, path)
+
+
+def _map_panel(ax, rows: list[dict]) -> None:
+    """One panel of the stability map: a ring (simulated) around a dot (analytic) per row."""
+    for r in rows:
+        colour, marker = _style(r["simulated_verdict"])
+        ax.scatter(
+            r["step_time"], r["slope_deg"], s=190, marker=marker, facecolors="white",
+            edgecolors=colour, linewidths=2.2, zorder=2,
+        )  # fmt: skip
+        colour, marker = _style(r["analytic_verdict"])
+        ax.scatter(
+            r["step_time"], r["slope_deg"], s=38, marker=marker, c=colour,
+            edgecolors="none", zorder=3,
+        )  # fmt: skip
+    ax.set_xlabel("step time [s]")
+    ax.grid(alpha=0.3)
 
 
 def _legend_marker(verdict: str, *, filled: bool):
@@ -232,16 +256,38 @@ def _lost_note(result, start: float, end: float, *, any_cop: bool) -> str:
     return f"{head}{fell}\n{lost.cause}"
 
 
-def lipm_vs_step_time(step_times, analytic_mm, simulated_mm, path: Path) -> Path:
-    """RMS distance of the LIPM ZMP from the multibody ZMP and the simulated CoP."""
+LIPM_MARKERS = ("o", "^", "D", "v", "P", "X")  # one per robot
+
+
+def lipm_vs_step_time(series: dict, path: Path) -> Path:
+    """RMS distance of the LIPM ZMP from the multibody ZMP and the simulated CoP.
+
+    Args:
+        series: robot name (None: the table's only robot, unnamed) → (step times [s],
+            multibody ZMP to LIPM [mm], simulated CoP to LIPM [mm]); each robot its own
+            pair of lines, never one line through two robots.
+    """
     fig, ax = plt.subplots(figsize=(5.5, 4))
-    ax.plot(step_times, analytic_mm, "o-", label="multibody ZMP (eq. 4) vs LIPM (eq. 5)")
-    ax.plot(step_times, simulated_mm, "s--", label="simulated CoP vs LIPM (while standing)")
+    for k, (name, (step_times, analytic_mm, simulated_mm)) in enumerate(series.items()):
+        if name is None:
+            styles, who = ("o-", "s--"), ""
+        else:
+            marker = LIPM_MARKERS[k % len(LIPM_MARKERS)]
+            styles, who = (f"{marker}-", f"{marker}--"), f"{name}: "
+        colour = {} if name is None else {"color": f"C{k}"}
+        ax.plot(
+            step_times, analytic_mm, styles[0], **colour,
+            label=f"{who}multibody ZMP (eq. 4) vs LIPM (eq. 5)",
+        )  # fmt: skip
+        ax.plot(
+            step_times, simulated_mm, styles[1], **colour,
+            label=f"{who}simulated CoP vs LIPM (while standing)",
+        )  # fmt: skip
     ax.set_xlabel("step time [s]")
     ax.set_ylabel("RMS distance [mm]")
     ax.set_yscale("log")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8 if len(series) == 1 else 7)
     fig.tight_layout()
     return _save(fig, path)
 

@@ -1,8 +1,10 @@
 """The sweep's report: claims table, confusion table and figures, written whole and right.
 
-Each claim's numbers in ``claims.md`` are recomputed here from the primitives, outside
+Each claim's numbers are recomputed here from the primitives, outside
 ``bench/report/claims.py``: MuJoCo's ``mj_inverse`` for the ZMP on slopes, the planner
-and a trial for margins and torques, the sweep table for the simulated cells.
+and a trial for margins and torques, the sweep table for the simulated cells. The
+claims that need the paper's cases are checked on the committed paper sweep's table
+(``results/sweep.csv``); the smoke sweep's report holds only what its four trials hold.
 """
 
 import csv
@@ -10,13 +12,16 @@ import re
 import subprocess
 import sys
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
 from mj_reference import StanceRootedInverse
 
+from slopewalk.bench.report.claims import lipm_claim, mass_claims, slope_claim, torque_claim
 from slopewalk.bench.sim.trial import run_trial
 from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.bench.tables.table import read_table
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.kinematics import gravity_in_slope
 from slopewalk.planner.plan import plan_walk
@@ -42,6 +47,12 @@ def report(tmp_path_factory):
     return out, {c[0]: c[1:] for c in cells}, rows, table
 
 
+@pytest.fixture(scope="module")
+def paper_rows():
+    """The committed paper sweep's rows: every case the paper's claims need."""
+    return read_table(Path(__file__).parents[2] / "results" / "sweep.csv")
+
+
 def _numbers(text: str) -> list[float]:
     return [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?", text)]
 
@@ -52,26 +63,23 @@ def _claim(claims, start: str) -> list[str]:
 
 
 def test_sweep_report_writes_claims_and_figures(report):
-    out, _, rows, _ = report
-    for name in (
-        "claims.md",
-        "confusion.md",
-        "stability_map.png",
-        "zmp_traces.png",
-        "joint_torques.png",
-        "joint_angles.png",
-        "lipm_vs_step_time.png",
-    ):
+    """The smoke sweep holds none of the walks the ZMP-trace and joint figures show (all
+    at μ = 1, stiff, no mass scaling) nor two flat step times at μ = 1: no such figure."""
+    out, claims, rows, _ = report
+    for name in ("claims.md", "confusion.md", "stability_map.png"):
         assert (out / name).stat().st_size > 0, name
+    assert sorted(p.name for p in out.glob("*.png")) == ["stability_map.png"]
     assert len(rows) >= 7  # header + one row per claim
     assert all(line.count("|") == 7 for line in rows)  # no stray '|' inside a cell
     assert not list(out.glob("*.part"))
+    absent = [c for c, cells in claims.items() if cells[3] == "not in this sweep"]
+    assert len(absent) == 5, absent  # step time, slopes, 10x mass, LIPM, torques
+    assert _claim(claims, "doubling")[3] != "not in this sweep"  # its {legs = 2} trial is there
 
 
-def test_slope_claim_zmp_positions_are_mujocos(spec, report):
+def test_slope_claim_zmp_positions_are_mujocos(spec, paper_rows):
     """Mean SSP ZMP x from the stance ankle, per slope: the CoP of mj_inverse's ground wrench."""
-    _, claims, _, _ = report
-    analytic = _claim(claims, "slopes:")[1]
+    analytic = slope_claim(paper_rows, spec)["analytic"]
     stated = dict(re.findall(r"([\d.]+)°: ([-+]\d+\.\d)", analytic))
     assert set(stated) == {"0", "15", "18", "22.5"}
     for slope_deg, value in stated.items():
@@ -87,8 +95,12 @@ def test_slope_claim_zmp_positions_are_mujocos(spec, report):
         assert float(value) == pytest.approx(np.mean(x) * 1e3, abs=0.051), slope_deg
 
 
-def test_mass_claims(spec, report):
-    _, claims, _, table = report
+def test_mass_claims(spec, report, paper_rows):
+    _, smoke, _, table = report
+    claims = {
+        c["claim"]: [c["paper"], c["analytic"], c["simulated"]]
+        for c in mass_claims(paper_rows, spec)
+    }
     nominal = plan_walk(spec, GaitParams.nominal(spec, 1.0))
     # 10x every mass and inertia: the ZMP is invariant (every term of eq. 4 scales alike)
     shift, margin, base = _numbers(_claim(claims, "10×")[1])[-3:]
@@ -102,26 +114,28 @@ def test_mass_claims(spec, report):
     assert shift == pytest.approx(np.hypot(*(heavy.zmp - nominal.zmp).T).max() * 1e3, abs=0.051)
     assert margin == pytest.approx(heavy.margin.min() * 1e3, abs=0.051)
     assert margin < 0 < base
-    (row,) = [r for r in table if r["mass_scale"] == "legs=2"]
+    (row,) = [r for r in paper_rows if r["mass_scale"] == "legs=2"]
     assert cells[2].startswith(f"{row['simulated_verdict']} (μ 1, RMS ")
     assert _numbers(cells[2])[1] == pytest.approx(float(row["zmp_rms_mm"]), abs=0.051)
+    # the smoke sweep's report: the same claim from its own {legs = 2} row
+    (row,) = [r for r in table if r["mass_scale"] == "legs=2"]
+    assert _claim(smoke, "doubling")[2].startswith(f"{row['simulated_verdict']} (μ 1, RMS ")
 
 
-def test_lipm_claim_margins_at_fast_steps(spec, report):
-    _, claims, _, _ = report
-    lipm, multibody = _numbers(_claim(claims, "LIPM")[1].split("at 0.4 s")[1])[-2:]
+def test_lipm_claim_margins_at_fast_steps(spec, paper_rows):
+    lipm, multibody = _numbers(lipm_claim(paper_rows, spec)["analytic"].split("at 0.4 s")[1])[-2:]
     fast = plan_walk(spec, GaitParams.nominal(spec, 0.4))
     assert multibody == pytest.approx(fast.margin.min() * 1e3, abs=0.51)
     assert lipm == pytest.approx(signed_margin(fast.zmp_lipm, fast.polygon).min() * 1e3, abs=0.51)
     assert lipm > multibody  # the LIPM sees less of the trouble
 
 
-def test_torque_claim_stance_and_swing(spec, report):
+def test_torque_claim_stance_and_swing(spec):
     """Peaks and RMS of stance vs swing joints, planned and simulated (MJCF order remapped)."""
-    _, claims, _, _ = report
-    cells = _claim(claims, "stance joints")
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0))
     result = run_trial(spec, TrialSpec(plan.params), plan=plan)
+    claim = torque_claim(plan, result)
+    cells = [claim["paper"], claim["analytic"], claim["simulated"]]
 
     def figures(stance, swing):
         rms = [float(np.sqrt(np.mean(x**2, axis=0)).mean()) for x in (stance, swing)]
@@ -142,5 +156,7 @@ def test_torque_claim_stance_and_swing(spec, report):
 def test_a_zero_zmp_shift_is_written_as_zero_whatever_the_rounding_noise(spec):
     from slopewalk.bench.report.claims import mass_claims
 
-    heavier = mass_claims([], spec)[0]  # 10x every mass: the ZMP moves by rounding noise only
+    row = {"step_time": 1.0, "slope_deg": 0.0, "friction": 1.0, "actuators": "stiff",
+           "mass_scale": "all=10", "simulated_verdict": "stable", "zmp_rms_mm": 1.0}  # fmt: skip
+    heavier = mass_claims([row], spec)[0]  # 10x every mass: the ZMP moves by rounding noise only
     assert heavier["analytic"].startswith("max ZMP shift 0.0000 mm;")

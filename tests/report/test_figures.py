@@ -88,3 +88,60 @@ def test_zmp_traces_say_why_a_panel_has_no_simulated_cop(spec, drawn, tmp_path):
     assert note.startswith("no simulated CoP") and f"{lost.kind} at {lost.time:.2f} s" in note
     assert lost.cause in note
     assert len(flat.texts) == 0 and "step 2 of 4" in flat.get_title()
+
+
+def _legend_boxes(fig):
+    fig.canvas.draw()
+    return [leg.get_window_extent() for leg in fig.legends], fig.bbox
+
+
+@pytest.mark.parametrize("frictions", [(1.0,), (0.6, 1.0), (0.4, 0.6, 1.0)])
+@pytest.mark.parametrize("robots", [("default",), ("big.toml", "default")])
+def test_stability_map_legends_neither_overlap_nor_clip(drawn, tmp_path, frictions, robots):
+    """One panel (a small sweep) or three: both legends inside the figure, apart, above
+    the panels; one row of panels per robot, each panel only its robot's points."""
+    rows = [
+        {**_row(t, "stable", "tip" if robot == "default" else "stable"), "friction": mu,
+         "robot": robot}
+        for robot in robots for mu in frictions for t in (0.5, 1.0)
+    ]  # fmt: skip
+    figures.stability_map(rows, tmp_path / "map.png")
+    fig = drawn[0]
+    (analytic, simulated), box = _legend_boxes(fig)
+    for legend in (analytic, simulated):
+        assert box.x0 <= legend.x0 and legend.x1 <= box.x1, (legend, box)
+        assert box.y0 <= legend.y0 and legend.y1 <= box.y1, (legend, box)
+        for ax in fig.axes:
+            assert not legend.overlaps(ax.get_tightbbox()), "a legend over a panel"
+    assert not analytic.overlaps(simulated)
+    assert len(fig.axes) == len(frictions) * len(robots)
+    for ax in fig.axes:
+        robot = next((r for r in robots if f"robot {r}," in ax.get_title()), robots[0])
+        assert len(robots) == 1 or robot in ax.get_title()
+        rings = ax.collections[0::2]
+        tip = {tuple(ring.get_edgecolor()[0]) for ring in rings}
+        want = to_rgba(figures._style("tip" if robot == "default" else "stable")[0])
+        assert tip == {want}, (ax.get_title(), tip)
+
+
+def test_lipm_figure_draws_each_robot_apart(drawn, tmp_path):
+    """Two robots at the same step times: one line pair each, none joining two robots."""
+    series = {
+        "big.toml": ([0.5, 1.0], [43.4, 7.8], [90.0, 26.5]),
+        "default": ([0.5, 1.0], [16.1, 3.6], [27.9, 11.7]),
+    }
+    figures.lipm_vs_step_time(series, tmp_path / "lipm.png")
+    (ax,) = drawn[0].axes
+    lines = ax.get_lines()
+    assert len(lines) == 4
+    for name, (times, analytic, simulated) in series.items():
+        mine = [ln for ln in lines if ln.get_label().startswith(f"{name}: ")]
+        assert [list(ln.get_ydata()) for ln in mine] == [analytic, simulated]
+        assert all(list(ln.get_xdata()) == times for ln in mine)
+    unnamed = {None: series["default"]}
+    figures.lipm_vs_step_time(unnamed, tmp_path / "one.png")
+    labels = [ln.get_label() for ln in drawn[1].axes[0].get_lines()]
+    assert labels == [
+        "multibody ZMP (eq. 4) vs LIPM (eq. 5)",
+        "simulated CoP vs LIPM (while standing)",
+    ]
