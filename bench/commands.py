@@ -48,13 +48,13 @@ def gait_from_args(args: argparse.Namespace, spec: RobotSpec) -> GaitParams:
 
 
 def plan(args: argparse.Namespace) -> None:
-    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.plan import plan_checked
     from slopewalk.planner.spec import load_spec
     from slopewalk.planner.verdict import predict
 
     check_output(args.out)
     spec = load_spec(args.robot)
-    plan = plan_walk(spec, gait_from_args(args, spec))
+    plan, beyond = plan_checked(spec, gait_from_args(args, spec))  # its size, the ground
     with atomic_paths(args.out) as (tmp,), open(tmp, "wb") as f:
         plan.save_npz(f)
     summary = plan.summary()
@@ -86,6 +86,7 @@ def plan(args: argparse.Namespace) -> None:
         "peak torque [N m]: "
         + ", ".join(f"{k} {v:.3f}" for k, v in summary["peak_torque_Nm"].items())
     )
+    print("".join(f"beyond the robot: {note}\n" for note in beyond), end="")
     print(f"wrote {args.out}")
 
 
@@ -107,9 +108,8 @@ def mjcf(args: argparse.Namespace) -> None:
 
 
 def trial(args: argparse.Namespace) -> None:
-    from slopewalk.bench.sim.trial import run_trial
+    from slopewalk.bench.sim.trial import run_trial, trial_checked
     from slopewalk.bench.sim.trial_spec import TrialSpec
-    from slopewalk.planner.plan import plan_walk
     from slopewalk.planner.spec import load_spec
 
     outputs = {"--out": args.out, "--series": args.series, "--record": args.record}
@@ -132,7 +132,7 @@ def trial(args: argparse.Namespace) -> None:
         command_noise=float(np.deg2rad(args.command_noise)),
         noise_seed=args.noise_seed,
     )
-    plan = plan_walk(spec, trial.gait)
+    plan = trial_checked(spec, trial)  # its size said first; a walk the ground must pull refused
     result = run_trial(spec, trial, plan=plan)
     with atomic_paths(*outputs.values()) as tmps:
         tmp = dict(zip(outputs, tmps, strict=True))

@@ -9,7 +9,11 @@ keyed by its path from the repository root:
 - ``written_with``: the versions (``versions()``) of the run that wrote that content,
   or the string ``"not recorded"`` for files written before this manifest existed;
   those carry ``last_changed_in``, the commit that last changed the file;
-- ``verified_with``: the versions of a later run that wrote the same bytes again.
+- ``verified_with``: the versions of a later run that wrote the same bytes again;
+- ``code_sha256``: for the files of a step that names the source it depends on
+  (``regenerate.Step.code``), a digest of that source (``code_digest``) as it was when the
+  file was last written or verified; tests/test_trials.py fails when the source now
+  differs (the file may be stale: regenerate it).
 
 ``record`` is the one writer: ``slopewalk regenerate`` calls it for every file a
 step wrote. The manifest holds no dates, so a run that reproduces a file byte for
@@ -75,6 +79,20 @@ def last_commit(path: str | Path, root: str | Path = ".") -> str | None:
         return None
 
 
+def code_digest(patterns: tuple[str, ...], root: str | Path = ".") -> str:
+    """sha256 over the files matching ``patterns`` (globs from ``root``, ``**`` allowed),
+    sorted by path: each path and the sha256 of its bytes. Content only: no git needed,
+    and a rebase or a squash of the history that keeps the files keeps the digest."""
+    root = Path(root)
+    files = sorted({p for pattern in patterns for p in root.glob(pattern) if p.is_file()})
+    if not files:
+        raise ValueError(f"code_digest: no file matches {patterns}")
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(f"{path.relative_to(root).as_posix()}\0{sha256(path)}\n".encode())
+    return digest.hexdigest()
+
+
 def sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -97,30 +115,36 @@ def save(entries: dict[str, dict], root: str | Path = ".") -> Path:
     return path
 
 
-def entry_for(path: str, command: str, old: dict | None, *, root: str | Path = ".") -> dict:
+def entry_for(
+    path: str, command: str, old: dict | None, *, root: str | Path = ".", code: str | None = None
+) -> dict:
     """The manifest entry of ``path`` (from the repository root) just written by
-    ``command`` with this process's ``versions()``.
+    ``command`` with this process's ``versions()`` (and from source of digest ``code``).
 
     The same bytes as ``old`` speaks for keep ``old``'s writer and are marked
     ``verified_with`` these versions; other bytes start a new entry.
     """
     digest = sha256(Path(root) / path)
     now = versions()
+    source = {} if code is None else {"code_sha256": code}
     if old is not None and old.get("sha256") == digest:
-        kept = {k: v for k, v in old.items() if k != "verified_with"}
+        kept = {k: v for k, v in old.items() if k not in ("verified_with", "code_sha256")}
         if kept.get("written_with") == now:
-            return kept
-        return kept | {"command": command, "verified_with": now}
-    return {"command": command, "sha256": digest, "written_with": now}
+            return kept | source
+        return kept | {"command": command, "verified_with": now} | source
+    return {"command": command, "sha256": digest, "written_with": now} | source
 
 
-def record(paths: list[str], command: str, root: str | Path = ".") -> list[str]:
+def record(
+    paths: list[str], command: str, root: str | Path = ".", *, code: str | None = None
+) -> list[str]:
     """Record in the manifest that ``command`` just wrote ``paths`` (from the repository
-    root ``root``) with this process's versions; returns the paths whose entry changed."""
+    root ``root``) with this process's versions, from source of digest ``code`` (None: not
+    recorded); returns the paths whose entry changed."""
     entries = load(root)
     changed = []
     for path in paths:
-        new = entry_for(path, command, entries.get(path), root=root)
+        new = entry_for(path, command, entries.get(path), root=root, code=code)
         if entries.get(path) != new:
             entries[path] = new
             changed.append(path)

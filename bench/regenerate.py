@@ -34,6 +34,8 @@ class Step:
 
     ``stdout``: the output file its printed summary goes to (the trials' ``.txt``).
     ``manual``: a file written by hand from a command's output; listed, never run.
+    ``code``: globs of the source its outputs depend on; its digest is recorded with them
+    (``provenance.code_digest``) and a test fails when that source changes.
     """
 
     args: tuple[str, ...]
@@ -41,6 +43,7 @@ class Step:
     minutes: float
     stdout: str | None = None
     manual: bool = False
+    code: tuple[str, ...] = ()
 
     @property
     def command(self) -> str:
@@ -100,11 +103,29 @@ _TRIALS = (("2", "0", "1.0"), ("0.5", "0", "1.0"), ("0.4", "0", "1.0"), ("1", "1
            ("1", "15", "1.0"), ("1", "30", "0.5"), ("1", "30", "1.0"))  # fmt: skip
 
 
+# The source a `slopewalk trial` runs (the modules it imports: the planner and the robot
+# spec, the simulation, the command and its flags; not the experiments, tables or reports).
+TRIAL_CODE = (
+    "planner/**/*.py",
+    "planner/**/*.toml",
+    "bench/__init__.py",
+    "bench/actuators.py",
+    "bench/cli.py",
+    "bench/commands.py",
+    "bench/files.py",
+    "bench/flags.py",
+    "bench/controllers/**/*.py",
+    "bench/sim/**/*.py",
+)
+
+
 def _trial(step_time: str, slope: str, friction: str) -> Step:
     stem = f"results/trials/T{step_time}_slope{slope}_mu{friction}"
     command = f"slopewalk trial --step-time {step_time} --slope {slope} --friction {friction}"
     outputs = (f"{stem}.json", f"{stem}.txt")
-    return _step(f"{command} --out {stem}.json", outputs, 0.1, stdout=f"{stem}.txt")
+    return _step(
+        f"{command} --out {stem}.json", outputs, 0.1, stdout=f"{stem}.txt", code=TRIAL_CODE
+    )
 
 
 STEPS: tuple[Step, ...] = (
@@ -201,7 +222,8 @@ def run_step(step: Step, root: Path = Path(".")) -> list[str]:
             subprocess.run(argv, cwd=root, stdout=out, check=True)
     else:
         subprocess.run(argv, cwd=root, check=True)
-    return provenance.record(list(step.outputs), step.command, root)
+    code = provenance.code_digest(step.code, root) if step.code else None
+    return provenance.record(list(step.outputs), step.command, root, code=code)
 
 
 def regenerate(args) -> None:

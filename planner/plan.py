@@ -26,18 +26,26 @@ actuators spend, Σ∫ |τ θ̇| dt, per joint and in total.
 
 from __future__ import annotations
 
+import io
 import json
-from dataclasses import asdict, dataclass
+import os
+import sys
+import time
+import tracemalloc
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from slopewalk.planner.errors import SlopewalkError, UnreachableError
+from slopewalk.planner.errors import GaitError, SlopewalkError, UnreachableError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, stance_swing_to_left_right
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel.run import kernel_walk
+from slopewalk.planner.kinematics import GRAVITY
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.trajectory import Timeline
+from slopewalk.planner.verdict import predict
 
 
 @dataclass(frozen=True)
@@ -109,7 +117,61 @@ class Plan:
             "work_J": float(self.work.sum()),
             "max_friction_ratio": float(self.friction_ratio.max()),
             "max_lipm_distance_m": float(np.hypot(*(self.zmp - self.zmp_lipm).T).max()),
+            "beyond_robot": self.beyond_robot(),
         }
+
+    def ground_pull(self) -> str | None:
+        """Why this walk's ZMP, margin and friction ratio do not exist, or None.
+
+        A foot on the plane can only push (a unilateral contact). Where the planned
+        ground force normal to the plane is <= 0 the walk asks the ground to pull: the
+        robot would leave it. The ZMP and |F_t|/F_n divide by that normal force, so there
+        they are numbers without a physical meaning (at 0.2 s steps a margin of -68 m, a
+        friction ratio of inf). For the nominal gait this starts below about 0.33 s steps.
+        """
+        normal = self.ground_force[:, 2]
+        if normal.min() > 0:
+            return None
+        first, worst = int(np.argmax(normal <= 0)), int(np.argmin(normal))
+        weight = self.spec.total_mass * GRAVITY
+        return (
+            f"the walk asks the ground to pull: from t = {self.t[first]:.3f} s the planned "
+            f"force normal to the plane falls to {normal[worst] / weight:.2f} x the robot's "
+            f"weight (t = {self.t[worst]:.3f} s), but a foot can only push, so the robot would "
+            "leave the ground and its ZMP, margin and friction ratio do not exist there "
+            "(a longer step time asks less)"
+        )
+
+    def beyond_robot(self) -> list[str]:
+        """The physical limits of the robot this walk passes, one line each (none: []).
+
+        - the ground would have to pull (``ground_pull``);
+        - a joint needs more torque than the spec's servo gives at stall (its [servo]
+          ``stall_torque``): that servo cannot make the walk (the bench's ``stiff``
+          actuators have their own limit and may still play it);
+        - the ZMP leaves the support polygon by more than the robot is tall (ankle height
+          + thigh + shank, the highest its CoM can be): the normal force is then a small
+          share of the weight and the margin is no distance a foot could tip over.
+        """
+        notes = [pull] if (pull := self.ground_pull()) is not None else []
+        peak = np.abs(self.tau).max(axis=0)
+        j, stall = int(np.argmax(peak)), self.spec.stall_torque
+        if peak[j] > stall:
+            notes.append(
+                f"{JOINT_NAMES[j]} needs {peak[j]:.3g} N m, {peak[j] / stall:.3g} x the servo's "
+                f"stall torque {stall:g} N m ({self.spec.name} [servo]): that servo cannot "
+                "make this walk"
+            )
+        height = self.spec.ankle_height + self.spec.leg_reach
+        if pull is None and -self.margin.min() > height:
+            weight = self.spec.total_mass * GRAVITY
+            notes.append(
+                f"the ZMP leaves the support by {-self.margin.min():.3g} m, more than the "
+                f"robot is tall ({height:.3g} m): the ground carries as little as "
+                f"{self.ground_force[:, 2].min() / weight:.2f} x its weight, and the margin "
+                "is no distance a foot could tip over"
+            )
+        return notes
 
     def save_npz(self, file) -> None:
         """Write the series and a ``meta`` JSON string (spec and gait parameters).
@@ -191,6 +253,134 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
         "work": np.trapezoid(power, timeline.t, axis=0),
     }
     return Plan(params=params, spec=spec, **series)
+
+
+# A walk longer than this (100 s of walk at 1 ms) is measured before it is planned: its
+# size and time are said first, and it is refused when it cannot fit in memory. Below it
+# a plan takes a few seconds and a few hundred MB, and measuring would cost more than it tells.
+LARGE_WALK_SAMPLES = 100_000
+PROBE_STEP_TIME = 1.0  # [s] the probe walk: one step of the same gait, at most this long
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What a run will take, measured on a short probe of it and scaled by samples.
+
+    Attributes:
+        samples: Samples of the walk.
+        bytes: Peak memory the run allocates [B] (the probe's peak per sample, traced).
+        seconds: Wall time [s] (the probes' fixed part and their part per sample).
+        available: Memory the machine has available now [B].
+    """
+
+    samples: int
+    bytes: float
+    seconds: float
+    available: float
+
+    def line(self, what: str) -> str:
+        return (
+            f"{what}: {self.samples:,} samples, about {self.bytes / 1e9:.2g} GB of memory "
+            f"({self.available / 1e9:.3g} GB available) and {self.seconds:.0f} s"
+        )
+
+    def check(self, what: str) -> None:
+        """Raise when the run would not fit in the memory available, in one line."""
+        if self.bytes > self.available:
+            raise GaitError(
+                f"{self.line(what)}: does not fit in memory ({self.bytes / self.samples:,.0f} B "
+                "per sample, measured on a one-step walk): fewer steps, shorter steps or a "
+                "longer dt"
+            )
+
+
+def available_memory() -> float:
+    """Memory available to a new allocation now [B]: Linux's MemAvailable (free memory
+    and the page cache it may drop), else the free physical pages (``os.sysconf``)."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+
+
+def measure_cost(run: Callable[[GaitParams], object], params: GaitParams) -> Cost:
+    """The ``Cost`` of ``run(params)``, measured on probes of the same gait of one and two
+    steps (each step at most ``PROBE_STEP_TIME`` long): one run to load what a first run
+    loads (the compiled kernel, the simulator), one of each timed (time: the fixed part and
+    the part per sample, from the two), then the two-step one traced (memory: its peak per
+    sample, which the fixed part only makes larger)."""
+    short = replace(params, steps=1, step_time=min(params.step_time, PROBE_STEP_TIME))
+    long = replace(short, steps=2)
+    run(short)
+    seconds = []
+    for probe in (short, long):
+        start = time.perf_counter()
+        run(probe)
+        seconds.append(time.perf_counter() - start)
+    per_sample = max(seconds[1] - seconds[0], 0.0) / (long.samples - short.samples)
+    per_sample = per_sample or seconds[1] / long.samples
+    fixed = max(seconds[0] - per_sample * short.samples, 0.0)
+    tracing = tracemalloc.is_tracing()
+    if not tracing:
+        tracemalloc.start()
+    tracemalloc.reset_peak()
+    base = tracemalloc.get_traced_memory()[0]
+    try:
+        run(long)
+        peak = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        if not tracing:
+            tracemalloc.stop()
+    return Cost(
+        params.samples,
+        peak * params.samples / long.samples,
+        fixed + per_sample * params.samples,
+        available_memory(),
+    )
+
+
+def say_on_stderr(line: str) -> None:
+    """A command's note before a long run (stderr: the output files stay the results)."""
+    print(line, file=sys.stderr, flush=True)
+
+
+def plan_checked(
+    spec: RobotSpec, params: GaitParams, *, say: Callable[[str], object] = say_on_stderr
+) -> tuple[Plan, list[str]]:
+    """``plan_walk`` for a command: a large walk (``LARGE_WALK_SAMPLES``) has its size and
+    time said through ``say`` first and is refused when it cannot fit in memory; a walk
+    the ground would have to pull is refused (``Plan.ground_pull``). Returns the plan and
+    the other limits of the robot it passes (``Plan.beyond_robot``).
+
+    Raises:
+        GaitError: too large for the memory available, or the ground would have to pull.
+    """
+    if params.samples > LARGE_WALK_SAMPLES:
+        params.check_fits(spec)
+        cost = measure_cost(lambda p: _planned_and_judged(spec, p), params)
+        cost.check("plan")
+        say(cost.line("plan"))
+    plan = plan_walk(spec, params)
+    return plan, refuse_pull(plan)
+
+
+def refuse_pull(plan: Plan) -> list[str]:
+    """``plan.beyond_robot()``, or GaitError when the ground would have to pull."""
+    pull = plan.ground_pull()
+    if pull is not None:
+        raise GaitError(pull)
+    return plan.beyond_robot()
+
+
+def _planned_and_judged(spec: RobotSpec, params: GaitParams) -> None:
+    """What ``slopewalk plan`` computes: the plan, its predicted events, its npz file."""
+    plan = plan_walk(spec, params)
+    predict(plan, friction=np.inf)
+    plan.save_npz(io.BytesIO())
 
 
 def _check_reach(spec: RobotSpec, t: np.ndarray, distance: np.ndarray) -> None:

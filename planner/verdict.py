@@ -131,7 +131,10 @@ def slip_events(plan, friction: float) -> tuple[list[PredictedEvent], np.ndarray
     force = plan.ground_force
     tangential = np.hypot(force[:, 0], force[:, 1])
     normal = np.maximum(force[:, 2], 0.0)
-    excess = tangential - friction * normal
+    # μ F_n, the most the ground holds; 0 where no foot is loaded, for any μ (inf too:
+    # μ = inf means "no slip judged", and inf * 0 would be NaN and a RuntimeWarning)
+    held = np.multiply(friction, normal, out=np.zeros_like(normal), where=normal > 0)
+    excess = tangential - held
     slide = excursion_integral(plan.t, excess, plan.spec.total_mass)
     return _first_past(
         plan.t,

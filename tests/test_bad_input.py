@@ -11,10 +11,13 @@ import argparse
 import json
 import math
 import os
+import re
 import stat
 import subprocess
 import sys
+import warnings
 
+import numpy as np
 import pytest
 
 from slopewalk.bench.cli import main
@@ -68,13 +71,17 @@ INPUTS = {  # file name in {in} -> content
     "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
     "envelope_name.toml": ENVELOPE + 'controller = ["ankle_cop_feedback"]\n',
     "envelope_number.toml": ENVELOPE + "controller = [1]\n",
+    "envelope_grids.toml": "[[grid]]\nstep_time = [1.0]\nslope = [0]\n"
+    + "[[grid]]\nstep_time = [0.5]\nslope = [10]\n",
+    "envelope_modes.toml": ENVELOPE + 'actuators = ["servo", "servo"]\n',
+    "envelope_metres.toml": ENVELOPE + "[search]\nrequired_margin = 0.005\n",
     "envelope_clash.toml": ENVELOPE  # two callables of one name: their columns would clash
     + 'controller = ["slopewalk.bench.controllers:load_controller",'
     + ' "slopewalk.bench.sim.closed_loop:load_controller"]\n',
 }
 
 PLAN = ["plan", "--step-time", "1"]
-TRIAL = ["trial", "--step-time", "0.3", "--steps", "1"]
+TRIAL = ["trial", "--step-time", "0.4", "--steps", "1"]
 ROBOT = [*PLAN, "--robot"]
 DEFAULT_OUT = {  # an --out is added where a row has none
     "plan": "{out}/p.npz",
@@ -101,6 +108,14 @@ CASES = [
     ([*PLAN, "--steps", "0"], "--steps: 0: must be an integer in [1, 1000]"),
     ([*PLAN, "--steps", "2.5"], "--steps: '2.5' is not an integer"),
     (["plan", "--step-time", "50", "--steps", "900"], "4.5e+07 samples: must be <= 1e+06"),
+    # in range, but beyond what any robot on its feet does: the ground would have to pull
+    (
+        ["plan", "--step-time", "0.0105"],
+        "the walk asks the ground to pull: from t = 0.000 s the planned force normal to the "
+        "plane falls to -834.80 x the robot's weight",
+    ),
+    (["plan", "--step-time", "0.2"], "falls to -1.59 x the robot's weight (t = 0.140 s)"),
+    (["trial", "--step-time", "0.02"], "ZMP, margin and friction ratio do not exist there"),
     ([*PLAN, "--slope", "60"], "--slope: 60: must lie in (-60, 60) deg"),
     ([*PLAN, "--slope", "-75"], "--slope: -75: must lie in (-60, 60) deg"),
     ([*PLAN, "--slope", "nan"], "--slope: nan: must lie in"),
@@ -187,6 +202,15 @@ CASES = [
         ["envelope", "{in}/envelope_clash.toml"],
         "grid.controller: controllers slopewalk.bench.controllers:load_controller, "
         "slopewalk.bench.sim.closed_loop:load_controller: their callables' names",
+    ),
+    (["envelope", "{in}/envelope_grids.toml"], "an envelope takes one [grid] table, whose"),
+    (
+        ["envelope", "{in}/envelope_modes.toml"],
+        "grid.actuators = ['servo', 'servo']: names servo more than once",
+    ),
+    (
+        ["envelope", "{in}/envelope_metres.toml"],
+        "search.required_margin = 0.005 mm: looks like metres",
     ),
     (
         ["controllers", "--envelope", "{in}/a_file"],
@@ -474,3 +498,64 @@ def test_a_trial_writes_strict_json_a_series_and_a_recording(tmp_path):
     assert record.stat().st_size > 0 and record.read_bytes()[:4] == b"RRF2"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "t.npz", "t.rrd"]
     assert math.isfinite(json.loads(out.read_text())["zmp_rms"])
+
+
+def test_a_walk_beyond_the_servo_says_so_with_no_numpy_warning(dirs, capsys):
+    """0.33 s steps: the ground still pushes, but the ankle needs 1.15 x the stall torque
+    and the ZMP is 1.5 m outside the foot; the summary says both, numpy says nothing."""
+    root, _, out = dirs
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        code = main(["plan", "--step-time", "0.33", "--out", str(out / "p.npz")])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert printed.err == ""
+    assert (
+        "beyond the robot: swing_ankle_roll needs 1.72 N m, 1.15 x the servo's stall torque "
+        "1.5 N m (bioloid-8dof [servo])" in printed.out
+    )
+    assert (
+        "beyond the robot: the ZMP leaves the support by 1.48 m, more than the robot is tall "
+        "(0.254 m)" in printed.out
+    )
+    code = main(["plan", "--step-time", "1", "--out", str(out / "q.npz")])
+    assert code == 0 and "beyond the robot" not in capsys.readouterr().out
+
+
+def test_a_large_walk_says_its_size_first_and_is_refused_beyond_memory(dirs, capsys, monkeypatch):
+    from slopewalk.planner import plan
+
+    root, _, out = dirs
+    argv = ["plan", "--step-time", "1", "--steps", "101", "--out", str(out / "p.npz")]
+    monkeypatch.setattr(plan, "available_memory", lambda: 1e8)  # 100 MB: a 0.4 GB plan won't fit
+    code, err, printed = _refused(argv, capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert re.fullmatch(
+        r"slopewalk: error: plan: 101,401 samples, about 0\.\d+ GB of memory \(0\.1 GB "
+        r"available\) and \d+ s: does not fit in memory \([\d,]+ B per sample, measured on a "
+        r"one-step walk\): fewer steps, shorter steps or a longer dt\n",
+        err,
+    ), err
+    assert list(out.iterdir()) == [] and printed == ""
+    monkeypatch.undo()
+    code, err, printed = _refused(argv, capsys)
+    assert code == 0, err
+    assert re.fullmatch(r"plan: 101,401 samples, about 0\.\d+ GB of memory \([\d.]+ GB "
+                        r"available\) and \d+ s\n", err), err  # fmt: skip
+    assert "101401 samples" in printed
+
+
+def test_slip_with_no_friction_limit_is_judged_without_a_warning():
+    """mu = inf on a walk whose feet leave the ground (0.2 s steps): mu * 0 is 0, not NaN."""
+    from slopewalk.planner.gait import GaitParams
+    from slopewalk.planner.plan import plan_walk
+    from slopewalk.planner.spec import load_spec
+    from slopewalk.planner.verdict import slip_events
+
+    spec = load_spec()
+    walk = plan_walk(spec, GaitParams.nominal(spec, 0.2))
+    assert walk.ground_force[:, 2].min() < 0  # the case: a normal force <= 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        events, slide = slip_events(walk, np.inf)
+    assert np.all(np.isfinite(slide)) and all(e.kind == "slip" for e in events)

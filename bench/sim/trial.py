@@ -29,9 +29,10 @@ foot_slide) or
 
 from __future__ import annotations
 
+import io
 import json
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -43,7 +44,14 @@ from slopewalk.bench.sim.support import support_difference
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.kinematics import GRAVITY
-from slopewalk.planner.plan import Plan, plan_walk
+from slopewalk.planner.plan import (
+    LARGE_WALK_SAMPLES,
+    Plan,
+    measure_cost,
+    plan_walk,
+    refuse_pull,
+    say_on_stderr,
+)
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.verdict import TIP_ANGLE
 from slopewalk.planner.zmp import signed_margin
@@ -227,6 +235,31 @@ def run_trial(
         noise_seed=trial.noise_seed,
     )
     return compare(plan, trial, recording, wall_s=time.perf_counter() - start, predict=predict)
+
+
+def trial_checked(spec: RobotSpec, trial: TrialSpec, *, say=say_on_stderr) -> Plan:
+    """The plan of ``trial`` for the ``trial`` command: a large walk
+    (``plan.LARGE_WALK_SAMPLES``) has its size and time said through ``say`` first, measured
+    on a one-step trial of the same gait (series file included), and is refused when it
+    cannot fit in memory; a walk the ground would have to pull is refused
+    (``Plan.ground_pull``: its analytic ZMP, margin and friction ratio do not exist).
+
+    Raises:
+        GaitError: too large for the memory available, or the ground would have to pull.
+    """
+    if trial.gait.samples > LARGE_WALK_SAMPLES:
+        trial.gait.check_fits(spec)
+
+        def one(gait):
+            result = run_trial(spec, replace(trial, gait=gait))
+            np.savez_compressed(io.BytesIO(), **result.series)
+
+        cost = measure_cost(one, trial.gait)
+        cost.check("trial")
+        say(cost.line("trial"))
+    plan = plan_walk(spec, trial.gait)
+    refuse_pull(plan)
+    return plan
 
 
 NOT_PREDICTED = "not_predicted"  # the verdict columns of a trial compared with predict=False

@@ -84,6 +84,24 @@ def _with(section: str, **values) -> dict:
             ),
             "their callables' names (load_controller, load_controller) must differ",
         ),
+        (
+            {"grid": [GOOD["grid"], {"step_time": [0.5], "slope": [10]}]},
+            "[[grid]] is an array of 2 tables: an envelope takes one [grid] table, whose "
+            "step_time x slope product is the plane its figure and boundaries draw",
+        ),
+        (
+            _with("grid", actuators=["servo", "servo"]),
+            "grid.actuators = ['servo', 'servo']: names servo more than once",
+        ),
+        (
+            _with("search", required_margin=0.005),
+            "search.required_margin = 0.005 mm: looks like metres (the key is in mm; 0.005 m "
+            "would be 5 mm)",
+        ),
+        (
+            _with("search", required_margin=30),
+            "search.required_margin = 30 mm: must be below half the sole's width, 30 mm",
+        ),
         ({**GOOD, "steps": 0}, "steps = 0: must be an integer in [1, 1000]"),
         ({**GOOD, "description": 3}, "description = 3: must be a string"),
     ],
@@ -178,3 +196,9 @@ def test_the_command_refuses_a_bad_file_in_one_line_and_writes_nothing(
     err = capsys.readouterr().err
     assert err.startswith("slopewalk: error: ") and message in err and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_required_margins_in_mm_from_zero_to_half_the_sole_are_taken(tmp_path):
+    for mm, metres in ((0, 0.0), (0.03, 0.03e-3), (5, 5e-3), (29.9, 29.9e-3)):
+        config = envelope_from_dict(_with("search", required_margin=mm), base_dir=tmp_path)
+        assert config.search.required_margin == pytest.approx(metres)

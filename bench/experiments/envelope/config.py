@@ -19,7 +19,13 @@ Format (degrees and millimetres at this edge, like the CLI)::
     generations = 30     # in [1, 100000] (30)
     seed = 0             # in [0, 2^32 - 1] (0)
     family = ["paper"]   # gait families searched, one row each ("paper", "extended")
-    required_margin = 5  # [mm] least ZMP margin of the least-work gait, in [0, 50] (5)
+    required_margin = 5  # [mm] least ZMP margin of the least-work gait, in [0, 50] (5),
+                         # below half the sole's width, 0 or not below that width in m
+
+One ``[grid]`` table (an array ``[[grid]]``, a sweep file's union of boxes, is refused:
+the grid is the plane the figure and the boundaries draw); an actuator mode named twice
+is refused; so is a ``required_margin`` no gait can meet or that reads as metres
+(``_check_margin_unit``).
 
 ``controller`` names closed-loop controllers (``MODULE:CALLABLE``, as in a sweep
 file; ``"none"``, open loop, is always played): each played gait is also walked,
@@ -145,9 +151,16 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
         _checked(v, "grid.friction", ranges.FRICTION, source)
         for v in _list(grid, "friction", [1.0], source)
     )
-    modes = _unique(_list(grid, "actuators", list(ACTUATOR_MODES), source))
-    for mode in modes:
+    given_modes = _list(grid, "actuators", list(ACTUATOR_MODES), source)
+    for mode in given_modes:
         actuator_mode(mode, EnvelopeError, f"{where}.actuators =")
+    modes = _unique(given_modes)
+    if len(modes) < len(given_modes):
+        twice = sorted({m for m in given_modes if given_modes.count(m) > 1})
+        raise EnvelopeError(
+            f"{where}.actuators = {given_modes!r}: names {', '.join(twice)} more than once "
+            "(each mode is played once per gait, into columns of its own)"
+        )
     controllers = tuple(
         c
         for c in _unique(_controller(v, where) for v in _list(grid, "controller", [], source))
@@ -164,6 +177,7 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
     bodies = list({b.spec_json: b for b in reversed(bodies)}.values())[::-1]  # first kept
 
     settings = _search(search, source)
+    _check_margin_unit(settings.required_margin, bodies, source)
     for body, t in itertools.product(bodies, step_times):  # the gait's own checks, per value
         for s in slopes:
             try:
@@ -219,6 +233,31 @@ def _search(table: dict, source: str) -> SearchSettings:
     )
 
 
+def _check_margin_unit(margin: float, bodies, source: str) -> None:
+    """Refuse a required margin [m] that no gait can meet or that reads as metres.
+
+    The ZMP margin is the ZMP's distance inside the support polygon; in single support
+    that is one sole, so no margin exceeds half its width (the sole's narrower side). A
+    required margin of at least that is met by no gait. And a positive value below half
+    the sole's width *in metres* (0.03 for the paper's biped) is a plausible margin
+    written in metres: read as millimetres it asks for less than 30 µm, so it is refused
+    as a likely unit slip rather than searched.
+    """
+    half = min(b.spec.foot_width for b in bodies) / 2  # [m]
+    mm = margin * 1e3
+    if mm >= half * 1e3:
+        raise EnvelopeError(
+            f"{source}: search.required_margin = {mm:g} mm: must be below half the sole's "
+            f"width, {half * 1e3:g} mm (the ZMP is never farther inside a sole)"
+        )
+    if 0 < mm < half:
+        raise EnvelopeError(
+            f"{source}: search.required_margin = {mm:g} mm: looks like metres (the key is in "
+            f"mm; {mm:g} m would be {mm * 1e3:g} mm): give 0 or a margin in mm from "
+            f"{half:g} to {half * 1e3:g} (half the sole's width)"
+        )
+
+
 def _checked(value, key: str, allowed: ranges.Range, source: str):
     """``value`` if ``allowed`` holds it, else one line naming the key, value and range."""
     if not allowed.contains(value):
@@ -241,6 +280,13 @@ def _table(data: dict, key: str, source: str, *, required: bool) -> dict:
         if required:
             raise EnvelopeError(f"{source}: no [{key}] table: give at least step_time and slope")
         return {}
+    if isinstance(value, list) and key == "grid":
+        raise EnvelopeError(
+            f"{source}: [[grid]] is an array of {len(value)} tables: an envelope takes one "
+            "[grid] table, whose step_time x slope product is the plane its figure and "
+            "boundaries draw (a sweep file's [[grid]] is a union of boxes); write one "
+            "envelope file per grid"
+        )
     if not isinstance(value, dict):
         raise EnvelopeError(f"{source}: {key} must be a table [{key}]")
     return value
