@@ -474,7 +474,26 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("slopewalk: interrupted", file=sys.stderr)
         return 130
+    except SystemError as err:
+        if not _interrupted(err):
+            raise
+        print("slopewalk: interrupted", file=sys.stderr)
+        return 130
     return 0
+
+
+def _interrupted(err: BaseException) -> bool:
+    """A Ctrl-C that compiled code turned into another error: numba's ``SystemError``
+    ("returned a result with an exception set") raised from the ``KeyboardInterrupt``
+    that struck inside its callback (``batch.executor.held_interrupts`` says where)."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 if __name__ == "__main__":
