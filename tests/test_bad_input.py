@@ -14,6 +14,7 @@ import os
 import stat
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -21,6 +22,7 @@ from slopewalk.bench.cli import main
 from slopewalk.planner.spec import default_spec_path
 
 SPEC = default_spec_path().read_text()
+SWEEP_TABLE = (Path(__file__).resolve().parents[1] / "results" / "sweep.csv").read_bytes()
 
 
 def _spec(old: str, new: str, count: int = 1) -> str:
@@ -63,6 +65,11 @@ INPUTS = {  # file name in {in} -> content
     "empty_list.json": "[]",
     "broken.json": "[{",
     "a_file": "not a folder\n",
+    "cut_sweep.csv": SWEEP_TABLE[:5000],  # head -c 5000 results/sweep.csv: a line cut short
+    "empty.csv": "",
+    "cut_header.csv": SWEEP_TABLE[:100],
+    "header_only.csv": SWEEP_TABLE[: SWEEP_TABLE.index(b"\n") + 1],
+    "narrow_line.csv": SWEEP_TABLE[: SWEEP_TABLE.index(b"\n") + 1] + b"0123456789ab,1.0\n",
     "noisy_sweep.toml": "command_noise = 1e-4\n" + ENVELOPE,
     "nan_noise_sweep.toml": "command_noise = nan\n" + ENVELOPE,
     "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
@@ -86,6 +93,7 @@ DEFAULT_OUT = {  # an --out is added where a row has none
     "controllers": "{out}/c.md",
     "envelope": "{out}",
     "cop-error": "{out}/c.md",
+    "fidelity": "{out}/f.md",
 }
 CASES = [
     # numbers at the command line
@@ -243,6 +251,17 @@ CASES = [
         ["sweep", "--workers", "0", "--out", "{out}"],
         "--workers: 0: must be an integer in [1, 1024]",
     ),
+    # sweep tables read by a report: a cut copy is refused, never read as fewer rows
+    (
+        ["fidelity", "{in}/cut_sweep.csv"],
+        "cut_sweep.csv: not a sweep table (its last line has no newline: a torn write or a cut "
+        "copy?)",
+    ),
+    (["fidelity", "{in}/empty.csv"], "empty.csv: is empty, not a results table"),
+    (["fidelity", "{in}/cut_header.csv"], "cut_header.csv: not a results table (no whole header"),
+    (["fidelity", "{in}/header_only.csv"], "header_only.csv: a header and no row"),
+    (["fidelity", "{in}/narrow_line.csv"], "narrow_line.csv: line 2 has 2 fields, not"),
+    (["fidelity", "{in}/a_file"], "a_file: not a results table (its first line is not a header"),
     # robot spec files
     ([*ROBOT, "{in}/nan_com.toml"], "links.thigh.com nan m: must lie in [-5, 5] m"),
     ([*ROBOT, "{in}/inf_com.toml"], "links.thigh.com -inf m: must lie in [-5, 5] m"),
