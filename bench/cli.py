@@ -5,12 +5,17 @@ what it does, with examples; ``build_parser`` puts them together. The flags, the
 groups several commands share (gait, simulation, batch) and their range checks
 are in ``bench.flags``, what the commands do in ``bench.commands``.
 Every refusal is one line on stderr with exit status 2 and no traceback; output
-files appear only whole.
+files appear only whole. Ctrl-C ends any command with ``slopewalk: interrupted``
+and status 130; a closed output pipe (``slopewalk ... | head -3``) stops it
+quietly with status 141, as SIGPIPE stops a Unix filter (``_output_closed``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import select
+import signal
 import sys
 import textwrap
 
@@ -455,8 +460,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``slopewalk`` command; returns the exit status (2 for refused input)."""
+    """Run the ``slopewalk`` command; returns the exit status (2 for refused input, 130
+    for Ctrl-C, 141 when its output pipe was closed: ``_output_closed``)."""
     argv = sys.argv[1:] if argv is None else argv
+    finished = False
+    try:
+        try:
+            code = _main(argv)
+            finished = True
+            return code
+        finally:  # output to a pipe is buffered: meet a closed one here, not at the exit
+            sys.stdout.flush()
+            sys.stderr.flush()
+    except BrokenPipeError:  # the last lines, a refusal's or the help's found no reader
+        if not _output_gone():
+            raise
+        return _output_closed(argv, stopped=not finished)
+
+
+def _main(argv: list[str]) -> int:
     parser = build_parser()
     if not argv:
         parser.print_help(sys.stderr)
@@ -467,6 +489,10 @@ def main(argv: list[str] | None = None) -> int:
     except SlopewalkError as err:
         print(f"slopewalk: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        if not _output_gone():  # a pipe of our own (a worker's, a cluster's), not the user's
+            raise
+        return _output_closed(argv, stopped=True)
     except OSError as err:  # a file that vanished or a device that refused, mid-way
         where = f"{err.filename!r}: " if err.filename else ""
         print(f"slopewalk: error: {where}{err.strerror or err}", file=sys.stderr)
@@ -480,6 +506,48 @@ def main(argv: list[str] | None = None) -> int:
         print("slopewalk: interrupted", file=sys.stderr)
         return 130
     return 0
+
+
+OUTPUT_CLOSED = 128 + signal.SIGPIPE  # 141: what a shell reports for a writer that SIGPIPE ended
+
+
+def _output_gone() -> bool:
+    """Whether the reader of stdout or stderr has gone (``slopewalk ... | head -3``)."""
+    return any(_reader_gone(stream) for stream in (sys.stdout, sys.stderr))
+
+
+def _reader_gone(stream) -> bool:
+    try:
+        poll = select.poll()
+        poll.register(stream.fileno(), select.POLLOUT)
+        return any(event & (select.POLLERR | select.POLLHUP) for _, event in poll.poll(0))
+    except (OSError, ValueError, AttributeError):  # closed, replaced or no descriptor
+        return False
+
+
+def _output_closed(argv: list[str], *, stopped: bool) -> int:
+    """Stop quietly when the reader of our output has gone, as SIGPIPE stops a Unix filter,
+    with the status a shell gives such a filter (141), never a traceback or exit 1.
+
+    The command stops where the write failed (``stopped``; False: it had finished and only
+    its last lines were lost); its output files are whole or absent (``bench.files``),
+    and a stopped sweep or envelope keeps its finished rows for ``--resume``, as after
+    Ctrl-C. A stream without a reader is pointed at /dev/null, so nothing more is
+    written to it (nor complained of at exit); while stderr still has a reader (only
+    stdout was piped), a stopped sweep or envelope says how to finish in one line.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    gone = [stream for stream in (sys.stdout, sys.stderr) if _reader_gone(stream)]
+    for stream in gone:
+        os.dup2(devnull, stream.fileno())
+    os.close(devnull)
+    if stopped and sys.stderr not in gone and argv and argv[0] in ("sweep", "envelope"):
+        print(
+            f"slopewalk: stopped: stdout was closed (broken pipe); the finished rows are kept: "
+            f"'slopewalk {argv[0]} ... --resume' finishes the run",
+            file=sys.stderr,
+        )
+    return OUTPUT_CLOSED
 
 
 def _interrupted(err: BaseException) -> bool:

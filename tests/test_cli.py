@@ -148,3 +148,68 @@ def test_ctrl_c_during_optimize_is_one_line_and_130(delay, tmp_path):
     assert err.endswith("\nslopewalk: interrupted\n"), repr(err)
     assert proc.stdout is not None and proc.stdout.read() == b""
     assert not out.exists()
+
+
+def _user_env() -> dict:
+    """The environment of a user's shell: stdout to a pipe block-buffered, as Python has it."""
+    return {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+
+
+SMALL_SWEEP = "steps = 1\n[grid]\nstep_time = [0.3, 0.35, 0.4]\n"
+
+
+def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
+    """``slopewalk sweep s.toml --out r 2>&1 | head -1``: the reader goes after one line.
+
+    The run used to end silently with exit 1 (the progress line's BrokenPipeError, then
+    the error message's own). Now it stops as a filter stops on SIGPIPE: exit 141, the
+    finished rows kept in the partial table, and ``--resume`` finishes it."""
+    config, out = tmp_path / "s.toml", tmp_path / "r"
+    config.write_text(SMALL_SWEEP)
+    argv = [sys.executable, "-m", "slopewalk.bench.cli", "sweep", str(config), "--out", str(out)]
+    proc = subprocess.Popen(
+        [*argv, "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    first = proc.stdout.readline()  # head -1
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == 141
+    assert first.startswith(b"sweep: 3 trials, 0 already done")
+    assert not (out / "sweep.csv").exists()
+    kept = (out / "sweep.partial.csv").read_bytes().count(b"\n") - 1  # the header's
+    assert kept >= 1
+    again = subprocess.run(
+        [*argv, "--resume", "--workers", "1"], capture_output=True, text=True, timeout=300,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    assert f"{kept} already done" in again.stdout
+    assert (out / "sweep.csv").read_bytes().count(b"\n") == 4
+
+
+@pytest.mark.parametrize("command", ["plan", "sweep"])
+def test_a_closed_stdout_ends_quietly_with_141_after_the_work(command, tmp_path):
+    """``slopewalk plan ... | true``: stdout's reader is gone before the first line. The
+    command does its work (stdout is written at its end), then stops quietly with 141:
+    no ``Exception ignored ... BrokenPipeError`` on stderr, no exit 120."""
+    (tmp_path / "s.toml").write_text(SMALL_SWEEP)
+    args = {
+        "plan": ["plan", "--step-time", "1", "--steps", "1", "--out", "p.npz"],
+        "sweep": ["sweep", "s.toml", "--out", "r", "--workers", "1"],
+    }[command]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "slopewalk.bench.cli", *args], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 141, err
+    assert "Traceback" not in err and "Exception ignored" not in err and "error" not in err, err
+    if command == "plan":
+        assert err == ""
+        assert np.load(tmp_path / "p.npz")["t"].size > 0
+    else:  # the sweep finished: only its summary was lost, so no word of --resume
+        assert "--resume" not in err
+        assert (tmp_path / "r" / "sweep.csv").read_bytes().count(b"\n") == 4
