@@ -67,7 +67,9 @@ def _plan_parser(sub) -> None:
         "slopewalk plan --step-time 0.5 --hip-height 0.19 --tilt 8 --robot my.toml --out p.npz",
     )
     add_gait_flags(p)
-    p.add_argument("--out", required=True, metavar="FILE", help="output .npz")
+    p.add_argument(
+        "--out", required=True, metavar="FILE", help="output .npz (the name must end in .npz)"
+    )
     p.set_defaults(run=commands.plan)
 
 
@@ -117,10 +119,15 @@ def _trial_parser(sub) -> None:
         "verdict hang on the simulation's last bits? (open loop only; docs/sweep-format.md)",
     )
     p.add_argument(
-        "--noise-seed", type=integer(SEED), default=0, metavar="N", help=f"its seed, in {SEED}"
+        "--noise-seed",
+        type=integer(SEED),
+        metavar="N",
+        help=f"the seed of --command-noise (only with it), in {SEED} (default: 0)",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="output .json (scalars, events)")
-    p.add_argument("--series", metavar="FILE", help="also write the time series (.npz)")
+    p.add_argument(
+        "--series", metavar="FILE", help="also write the time series (a name ending in .npz)"
+    )
     p.add_argument(
         "--record",
         metavar="FILE",

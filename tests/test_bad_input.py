@@ -154,7 +154,21 @@ CASES = [
             "--controller",
             "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
         ],
-        "noise is for the plan played open loop",
+        "--command-noise 0.0001 deg with --controller slopewalk.bench.controllers.ankle_cop:"
+        "ankle_cop_feedback: the noise is for the plan played open loop",
+    ),
+    ([*TRIAL, "--noise-seed", "5"], "--noise-seed 5: seeds --command-noise, which is not given"),
+    (
+        [*TRIAL, "--command-noise", "0", "--noise-seed", "0"],
+        "--noise-seed 0: seeds --command-noise, which is not given (or 0): there is no noise",
+    ),
+    (
+        [*PLAN, "--out", "{out}/p.json"],
+        "--out '{out}/p.json': is written as a NumPy .npz archive; give a name ending in .npz",
+    ),
+    (
+        [*TRIAL, "--series", "{out}/s.json"],
+        "--series '{out}/s.json': is written as a NumPy .npz archive",
     ),
     # closed-loop controllers (tests/controller_faults.py holds the misbehaving ones)
     ([*TRIAL, "--controller", "ankle_cop_feedback"], "'ankle_cop_feedback': must read MODULE:CA"),
