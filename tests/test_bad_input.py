@@ -507,3 +507,22 @@ def test_a_trial_writes_strict_json_a_series_and_a_recording(tmp_path):
     assert record.stat().st_size > 0 and record.read_bytes()[:4] == b"RRF2"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "t.npz", "t.rrd"]
     assert math.isfinite(json.loads(out.read_text())["zmp_rms"])
+
+
+# Words that mislead: what a run prints says what it means, in the user's units.
+
+
+def test_a_trial_summary_says_na_never_nan_and_names_the_margins_polygon(tmp_path, capsys):
+    """A knee limited to 1.0 rad: the robot is lost while settling, so no loaded foot
+    rocks during the walk and its largest tilt does not exist: 'n/a', as the fields
+    beside it (it printed 'nan deg'). The simulated CoP's margin is measured against
+    the *planned* support polygon, and the line says so."""
+    robot = tmp_path / "knee.toml"
+    robot.write_text(_spec("knee = [-0.10, 2.60]", "knee = [-0.10, 1.0]"))
+    argv = [*PLAN, "--steps", "1", "--robot", str(robot), "--out", str(tmp_path / "t.json")]
+    code, err, out = _refused(["trial", *argv[1:]], capsys)
+    assert code == 0, err
+    (simulated,) = [line for line in out.splitlines() if line.startswith("simulated:")]
+    assert "loaded foot tilted up to n/a deg" in simulated
+    assert "nan" not in out.lower()
+    assert "min CoP margin     n/a mm (to the planned support polygon)" in simulated
