@@ -366,7 +366,7 @@ def _envelope_parser(sub) -> None:
         "envelope",
         "the best gait of every step time x slope cell, by the GA, walked in MuJoCo (resumable)",
         "For every cell of an envelope file (step time x slope x friction x robot; format in "
-        "bench/experiments/envelope/config.py), the GA finds the gait of largest minimum ZMP "
+        "docs/envelope-format.md), the GA finds the gait of largest minimum ZMP "
         "margin and the least-work gait whose margin is at least the required margin; each "
         "is re-planned at 1 ms and played in MuJoCo in every actuator mode. One row per cell "
         "and gait family goes to DIR/envelope.partial.csv as it ends, DIR/envelope.csv and "
@@ -382,7 +382,8 @@ def _envelope_parser(sub) -> None:
         "config",
         nargs="?",
         metavar="CONFIG",
-        help="envelope TOML (default: bench/experiments/envelopes/paper.toml)",
+        help="envelope TOML, format in docs/envelope-format.md (default: "
+        "bench/experiments/envelopes/paper.toml)",
     )
     add_batch_flags(
         p,
@@ -413,7 +414,9 @@ def _benchmark_parser(sub) -> None:
         "benchmark",
         "print speed figures as name: value lines",
         "Measure how fast a part of the bench runs and print one 'name: value' line per "
-        "figure (no thresholds: speed goals are read, never asserted).",
+        "figure (no thresholds: speed goals are read, never asserted). docs/benchmark.md "
+        "says what each name is and its unit (e.g. sim's and controller's 'ratio': the share "
+        "of the faster way's steps per second that the slower one keeps).",
         "slopewalk benchmark planner",
         "slopewalk benchmark sim",
         "slopewalk benchmark controller   # closed-loop vs rollout steps/s, same trial",
@@ -421,7 +424,8 @@ def _benchmark_parser(sub) -> None:
     p.add_argument(
         "what",
         choices=("planner", "sim", "ga", "sweep", "controller", "envelope"),
-        help="what to measure",
+        help="what to measure: the compiled planner, one MuJoCo trial, the paper's GA, "
+        "the default sweep, closed vs open loop, the default envelope (docs/benchmark.md)",
     )
     p.set_defaults(run=commands.benchmark)
 

@@ -213,3 +213,96 @@ def test_a_closed_stdout_ends_quietly_with_141_after_the_work(command, tmp_path)
     else:  # the sweep finished: only its summary was lost, so no word of --resume
         assert "--resume" not in err
         assert (tmp_path / "r" / "sweep.csv").read_bytes().count(b"\n") == 4
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+
+
+def _options(command: str) -> list[str]:
+    from slopewalk.bench.cli import build_parser
+
+    parser = build_parser()._subparsers._group_actions[0].choices[command]
+    return [o for a in parser._actions for o in a.option_strings if o not in ("-h", "--help")]
+
+
+def test_the_readme_synopsis_and_flag_table_name_every_gait_flag():
+    """``plan``'s synopsis line lists every flag of ``plan``, and the flag table has a row
+    for each (``trial`` takes them as "gait flags as for plan"); --sway-share,
+    --pelvis-offset and --step-length were missing from both."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("## Command line") :]
+    synopsis = section[
+        section.index("```bash") : section.index("```", section.index("```bash") + 3)
+    ]
+    plan = synopsis[synopsis.index("slopewalk plan") : synopsis.index("slopewalk trial")]
+    table = [line for line in section.splitlines() if line.startswith("| `--")]
+    for flag in _options("plan"):
+        assert f"[{flag} " in plan or f"{flag} " in plan, f"{flag} not in plan's synopsis"
+        assert any(f"`{flag} " in row or f"`{flag}`" in row for row in table), flag
+    trial = synopsis[synopsis.index("slopewalk trial") : synopsis.index("slopewalk mjcf")]
+    assert "[gait flags as for plan]" in trial
+    for flag in set(_options("trial")) - set(_options("plan")):
+        assert flag in trial, f"{flag} not in trial's synopsis"
+
+
+def _printed_names() -> dict[str, set[str]]:
+    """The names each ``slopewalk benchmark WHAT`` prints: the keys of the dicts its
+    functions return (read from the source, so nothing is run)."""
+    import ast
+
+    functions = {}
+    for path in (
+        ROOT / "bench" / "experiments" / "benchmark.py",
+        ROOT / "bench" / "experiments" / "envelope" / "benchmark.py",
+    ):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.FunctionDef) and node.name.endswith("_figures"):
+                keys = {
+                    k.value
+                    for ret in ast.walk(node)
+                    if isinstance(ret, ast.Return) and isinstance(ret.value, ast.Dict)
+                    for k in ret.value.keys
+                    if isinstance(k, ast.Constant)
+                }
+                functions[node.name] = keys
+    f = functions
+    return {
+        "planner": f["planner_figures"],
+        "sim": f["sim_figures"],
+        "ga": f["ga_figures"],
+        "sweep": f["grid_figures"] | f["sweep_figures"],
+        "controller": f["controller_figures"],
+        "envelope": f["envelope_figures"],
+    }
+
+
+def test_every_benchmark_figure_is_documented_in_its_section():
+    """``benchmark`` printed names such as ``ratio`` with no word of what they are:
+    docs/benchmark.md has a row per name, in the section of its benchmark, and the
+    command's help points there."""
+    from slopewalk.bench.cli import build_parser
+
+    doc = (ROOT / "docs" / "benchmark.md").read_text()
+    names = _printed_names()
+    choices = build_parser()._subparsers._group_actions[0].choices
+    what = [a for a in choices["benchmark"]._actions if a.dest == "what"][0]
+    assert set(names) == set(what.choices)
+    for benchmark, keys in names.items():
+        assert keys, benchmark
+        start = doc.index(f"## `{benchmark}`")
+        end = doc.find("\n## ", start + 1)
+        section = doc[start : end if end > 0 else None]
+        rows = {line.split("|")[1].strip().strip("`") for line in section.splitlines()[1:]
+                if line.startswith("| `")}  # fmt: skip
+        assert rows == keys, (benchmark, keys ^ rows)
+    assert "docs/benchmark.md" in choices["benchmark"].format_help()
+    assert "docs/envelope-format.md" in choices["envelope"].format_help()
+    assert "envelope_config.py" not in choices["envelope"].format_help()
+    assert "](docs/benchmark.md)" in (ROOT / "README.md").read_text()
+
+
+def test_the_tilt_help_gives_the_nominal_number():
+    from slopewalk.bench.cli import build_parser
+
+    text = build_parser()._subparsers._group_actions[0].choices["plan"].format_help()
+    assert "(default 12, every robot's nominal gait)" in " ".join(text.split())
