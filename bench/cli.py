@@ -500,11 +500,9 @@ def _main(argv: list[str]) -> int:
     except SlopewalkError as err:
         print(f"slopewalk: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2
-    except BrokenPipeError:
-        if not _output_gone():  # a pipe of our own (a worker's, a cluster's), not the user's
-            raise
-        return _output_closed(argv, stopped=True)
     except OSError as err:  # a file that vanished or a device that refused, mid-way
+        if isinstance(err, BrokenPipeError) and _output_gone():  # not a pipe of our own
+            return _output_closed(argv, stopped=True)
         where = f"{err.filename!r}: " if err.filename else ""
         print(f"slopewalk: error: {where}{err.strerror or err}", file=sys.stderr)
         return 2
