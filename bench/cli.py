@@ -5,12 +5,17 @@ what it does, with examples; ``build_parser`` puts them together. The flags, the
 groups several commands share (gait, simulation, batch) and their range checks
 are in ``bench.flags``, what the commands do in ``bench.commands``.
 Every refusal is one line on stderr with exit status 2 and no traceback; output
-files appear only whole.
+files appear only whole. Ctrl-C ends any command with ``slopewalk: interrupted``
+and status 130; a closed output pipe (``slopewalk ... | head -3``) stops it
+quietly with status 141, as SIGPIPE stops a Unix filter (``_output_closed``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import select
+import signal
 import sys
 import textwrap
 
@@ -62,7 +67,9 @@ def _plan_parser(sub) -> None:
         "slopewalk plan --step-time 0.5 --hip-height 0.19 --tilt 8 --robot my.toml --out p.npz",
     )
     add_gait_flags(p)
-    p.add_argument("--out", required=True, metavar="FILE", help="output .npz")
+    p.add_argument(
+        "--out", required=True, metavar="FILE", help="output .npz (the name must end in .npz)"
+    )
     p.set_defaults(run=commands.plan)
 
 
@@ -112,10 +119,15 @@ def _trial_parser(sub) -> None:
         "verdict hang on the simulation's last bits? (open loop only; docs/sweep-format.md)",
     )
     p.add_argument(
-        "--noise-seed", type=integer(SEED), default=0, metavar="N", help=f"its seed, in {SEED}"
+        "--noise-seed",
+        type=integer(SEED),
+        metavar="N",
+        help=f"the seed of --command-noise (only with it), in {SEED} (default: 0)",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="output .json (scalars, events)")
-    p.add_argument("--series", metavar="FILE", help="also write the time series (.npz)")
+    p.add_argument(
+        "--series", metavar="FILE", help="also write the time series (a name ending in .npz)"
+    )
     p.add_argument(
         "--record",
         metavar="FILE",
@@ -354,7 +366,7 @@ def _envelope_parser(sub) -> None:
         "envelope",
         "the best gait of every step time x slope cell, by the GA, walked in MuJoCo (resumable)",
         "For every cell of an envelope file (step time x slope x friction x robot; format in "
-        "bench/experiments/envelope/config.py), the GA finds the gait of largest minimum ZMP "
+        "docs/envelope-format.md), the GA finds the gait of largest minimum ZMP "
         "margin and the least-work gait whose margin is at least the required margin; each "
         "is re-planned at 1 ms and played in MuJoCo in every actuator mode. One row per cell "
         "and gait family goes to DIR/envelope.partial.csv as it ends, DIR/envelope.csv and "
@@ -370,7 +382,8 @@ def _envelope_parser(sub) -> None:
         "config",
         nargs="?",
         metavar="CONFIG",
-        help="envelope TOML (default: bench/experiments/envelopes/paper.toml)",
+        help="envelope TOML, format in docs/envelope-format.md (default: "
+        "bench/experiments/envelopes/paper.toml)",
     )
     add_batch_flags(
         p,
@@ -401,7 +414,9 @@ def _benchmark_parser(sub) -> None:
         "benchmark",
         "print speed figures as name: value lines",
         "Measure how fast a part of the bench runs and print one 'name: value' line per "
-        "figure (no thresholds: speed goals are read, never asserted).",
+        "figure (no thresholds: speed goals are read, never asserted). docs/benchmark.md "
+        "says what each name is and its unit (e.g. sim's and controller's 'ratio': the share "
+        "of the faster way's steps per second that the slower one keeps).",
         "slopewalk benchmark planner",
         "slopewalk benchmark sim",
         "slopewalk benchmark controller   # closed-loop vs rollout steps/s, same trial",
@@ -409,7 +424,8 @@ def _benchmark_parser(sub) -> None:
     p.add_argument(
         "what",
         choices=("planner", "sim", "ga", "sweep", "controller", "envelope"),
-        help="what to measure",
+        help="what to measure: the compiled planner, one MuJoCo trial, the paper's GA, "
+        "the default sweep, closed vs open loop, the default envelope (docs/benchmark.md)",
     )
     p.set_defaults(run=commands.benchmark)
 
@@ -455,8 +471,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``slopewalk`` command; returns the exit status (2 for refused input)."""
+    """Run the ``slopewalk`` command; returns the exit status (2 for refused input, 130
+    for Ctrl-C, 141 when its output pipe was closed: ``_output_closed``)."""
     argv = sys.argv[1:] if argv is None else argv
+    finished = False
+    try:
+        try:
+            code = _main(argv)
+            finished = True
+            return code
+        finally:  # output to a pipe is buffered: meet a closed one here, not at the exit
+            sys.stdout.flush()
+            sys.stderr.flush()
+    except BrokenPipeError:  # the last lines, a refusal's or the help's found no reader
+        if not _output_gone():
+            raise
+        return _output_closed(argv, stopped=not finished)
+
+
+def _main(argv: list[str]) -> int:
     parser = build_parser()
     if not argv:
         parser.print_help(sys.stderr)
@@ -468,13 +501,76 @@ def main(argv: list[str] | None = None) -> int:
         print(f"slopewalk: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2
     except OSError as err:  # a file that vanished or a device that refused, mid-way
+        if isinstance(err, BrokenPipeError) and _output_gone():  # not a pipe of our own
+            return _output_closed(argv, stopped=True)
         where = f"{err.filename!r}: " if err.filename else ""
         print(f"slopewalk: error: {where}{err.strerror or err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("slopewalk: interrupted", file=sys.stderr)
         return 130
+    except SystemError as err:
+        if not _interrupted(err):
+            raise
+        print("slopewalk: interrupted", file=sys.stderr)
+        return 130
     return 0
+
+
+OUTPUT_CLOSED = 128 + signal.SIGPIPE  # 141: what a shell reports for a writer that SIGPIPE ended
+
+
+def _output_gone() -> bool:
+    """Whether the reader of stdout or stderr has gone (``slopewalk ... | head -3``)."""
+    return any(_reader_gone(stream) for stream in (sys.stdout, sys.stderr))
+
+
+def _reader_gone(stream) -> bool:
+    try:
+        poll = select.poll()
+        poll.register(stream.fileno(), select.POLLOUT)
+        return any(event & (select.POLLERR | select.POLLHUP) for _, event in poll.poll(0))
+    except (OSError, ValueError, AttributeError):  # closed, replaced or no descriptor
+        return False
+
+
+def _output_closed(argv: list[str], *, stopped: bool) -> int:
+    """Stop quietly when the reader of our output has gone, as SIGPIPE stops a Unix filter,
+    with the status a shell gives such a filter (141), never a traceback or exit 1.
+
+    The command stops where the write failed (``stopped``; False: it had finished and only
+    its last lines were lost); its output files are whole or absent (``bench.files``),
+    and a stopped sweep or envelope keeps its finished rows for ``--resume``, as after
+    Ctrl-C. A stream without a reader is pointed at /dev/null, so nothing more is
+    written to it (nor complained of at exit); while stderr still has a reader (only
+    stdout was piped), a stopped sweep or envelope says how to finish in one line.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    gone = [stream for stream in (sys.stdout, sys.stderr) if _reader_gone(stream)]
+    for stream in gone:
+        os.dup2(devnull, stream.fileno())
+    os.close(devnull)
+    if stopped and sys.stderr not in gone and argv and argv[0] in ("sweep", "envelope"):
+        print(
+            f"slopewalk: stopped: stdout was closed (broken pipe); the finished rows are kept: "
+            f"'slopewalk {argv[0]} ... --resume' finishes the run",
+            file=sys.stderr,
+        )
+    return OUTPUT_CLOSED
+
+
+def _interrupted(err: BaseException) -> bool:
+    """A Ctrl-C that compiled code turned into another error: numba's ``SystemError``
+    ("returned a result with an exception set") raised from the ``KeyboardInterrupt``
+    that struck inside its callback (``batch.executor.held_interrupts`` says where)."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 if __name__ == "__main__":

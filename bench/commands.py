@@ -12,6 +12,7 @@ import argparse
 import contextlib
 import json
 import os
+import stat
 import sys
 from typing import TYPE_CHECKING
 
@@ -53,6 +54,7 @@ def plan(args: argparse.Namespace) -> None:
     from slopewalk.planner.verdict import predict
 
     check_output(args.out)
+    _named_npz(args.out, "--out")
     spec = load_spec(args.robot)
     plan, beyond = plan_checked(spec, gait_from_args(args, spec))  # its size, the ground
     with atomic_paths(args.out) as (tmp,), open(tmp, "wb") as f:
@@ -117,6 +119,9 @@ def trial(args: argparse.Namespace) -> None:
     _distinct(outputs)
     for flag, path in outputs.items():
         check_output(path, name=flag)
+    if args.series is not None:
+        _named_npz(args.series, "--series")
+    _check_noise_flags(args)
     if args.record is not None:
         record_trial = _recorder("--record")
     if args.controller is not None:
@@ -130,7 +135,7 @@ def trial(args: argparse.Namespace) -> None:
         actuators=args.actuators,
         controller=args.controller,
         command_noise=float(np.deg2rad(args.command_noise)),
-        noise_seed=args.noise_seed,
+        noise_seed=args.noise_seed or 0,
     )
     plan = trial_checked(spec, trial)  # its size said first; a walk the ground must pull refused
     result = run_trial(spec, trial, plan=plan)
@@ -144,6 +149,34 @@ def trial(args: argparse.Namespace) -> None:
             record_trial(tmp["--record"], plan, result)
     print("\n".join(result.summary_lines()))
     print("wrote " + ", ".join(str(p) for p in outputs.values()))
+
+
+def _named_npz(path, flag: str) -> None:
+    """A NumPy archive is written only under a name that says so (or to a device such as
+    /dev/null): ``plan --out p.json`` would leave an .npz that no JSON reader opens."""
+    from pathlib import Path
+
+    name = Path(path)
+    if name.suffix.lower() == ".npz" or (name.exists() and stat.S_ISCHR(name.stat().st_mode)):
+        return
+    raise SlopewalkError(
+        f"{flag} {str(path)!r}: is written as a NumPy .npz archive; give a name ending in .npz"
+    )
+
+
+def _check_noise_flags(args: argparse.Namespace) -> None:
+    """``--noise-seed`` seeds ``--command-noise``, which only an open-loop trial plays;
+    refused in the user's words (flags, degrees) before any work."""
+    if args.command_noise and args.controller is not None:
+        raise SlopewalkError(
+            f"--command-noise {args.command_noise:g} deg with --controller {args.controller}: "
+            "the noise is for the plan played open loop; a controller makes its own commands"
+        )
+    if args.noise_seed is not None and not args.command_noise:
+        raise SlopewalkError(
+            f"--noise-seed {args.noise_seed}: seeds --command-noise, which is not given (or 0): "
+            "there is no noise to seed"
+        )
 
 
 def _recorder(flag: str):

@@ -13,6 +13,7 @@ import math
 
 from slopewalk.bench.actuators import ACTUATOR_MODES, DEFAULT_MODE, MODES
 from slopewalk.planner import ranges
+from slopewalk.planner.gait import NOMINAL_TILT
 from slopewalk.planner.ranges import Range
 
 
@@ -38,8 +39,9 @@ class Formatter(argparse.RawDescriptionHelpFormatter):
 
 
 DOCS = (
-    "Formats: robot spec TOML in docs/robot-spec.md, sweep TOML in docs/sweep-format.md;\n"
-    "every flag in the README's 'Command line' section."
+    "Formats: robot spec TOML in docs/robot-spec.md, sweep TOML in docs/sweep-format.md,\n"
+    "envelope TOML in docs/envelope-format.md; every flag in the README's 'Command line'\n"
+    "section."
 )
 FINITE = Range(-math.inf, math.inf)
 # GaSettings asks >= 2; a generation is evaluated in one batch of about 1.8 MB per
@@ -132,7 +134,7 @@ def add_gait_flags(p: argparse.ArgumentParser, *, step_time_required: bool = Tru
         type=number(ranges.TILT_DEG),
         metavar="DEG",
         help=f"peak frontal lean towards the stance foot [deg], in {ranges.TILT_DEG} "
-        "(default: the nominal gait's)",
+        f"(default {math.degrees(NOMINAL_TILT):g}, every robot's nominal gait)",
     )
     p.add_argument(
         "--tilt-profile",

@@ -16,6 +16,7 @@ import stat
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from slopewalk.bench.cli import main
 from slopewalk.planner.spec import default_spec_path
 
 SPEC = default_spec_path().read_text()
+SWEEP_TABLE = (Path(__file__).resolve().parents[1] / "results" / "sweep.csv").read_bytes()
 
 
 def _spec(old: str, new: str, count: int = 1) -> str:
@@ -66,6 +68,11 @@ INPUTS = {  # file name in {in} -> content
     "empty_list.json": "[]",
     "broken.json": "[{",
     "a_file": "not a folder\n",
+    "cut_sweep.csv": SWEEP_TABLE[:5000],  # head -c 5000 results/sweep.csv: a line cut short
+    "empty.csv": "",
+    "cut_header.csv": SWEEP_TABLE[:100],
+    "header_only.csv": SWEEP_TABLE[: SWEEP_TABLE.index(b"\n") + 1],
+    "narrow_line.csv": SWEEP_TABLE[: SWEEP_TABLE.index(b"\n") + 1] + b"0123456789ab,1.0\n",
     "noisy_sweep.toml": "command_noise = 1e-4\n" + ENVELOPE,
     "nan_noise_sweep.toml": "command_noise = nan\n" + ENVELOPE,
     "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
@@ -93,6 +100,7 @@ DEFAULT_OUT = {  # an --out is added where a row has none
     "controllers": "{out}/c.md",
     "envelope": "{out}",
     "cop-error": "{out}/c.md",
+    "fidelity": "{out}/f.md",
 }
 CASES = [
     # numbers at the command line
@@ -161,7 +169,21 @@ CASES = [
             "--controller",
             "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
         ],
-        "noise is for the plan played open loop",
+        "--command-noise 0.0001 deg with --controller slopewalk.bench.controllers.ankle_cop:"
+        "ankle_cop_feedback: the noise is for the plan played open loop",
+    ),
+    ([*TRIAL, "--noise-seed", "5"], "--noise-seed 5: seeds --command-noise, which is not given"),
+    (
+        [*TRIAL, "--command-noise", "0", "--noise-seed", "0"],
+        "--noise-seed 0: seeds --command-noise, which is not given (or 0): there is no noise",
+    ),
+    (
+        [*PLAN, "--out", "{out}/p.json"],
+        "--out '{out}/p.json': is written as a NumPy .npz archive; give a name ending in .npz",
+    ),
+    (
+        [*TRIAL, "--series", "{out}/s.json"],
+        "--series '{out}/s.json': is written as a NumPy .npz archive",
     ),
     # closed-loop controllers (tests/controller_faults.py holds the misbehaving ones)
     ([*TRIAL, "--controller", "ankle_cop_feedback"], "'ankle_cop_feedback': must read MODULE:CA"),
@@ -267,6 +289,17 @@ CASES = [
         ["sweep", "--workers", "0", "--out", "{out}"],
         "--workers: 0: must be an integer in [1, 1024]",
     ),
+    # sweep tables read by a report: a cut copy is refused, never read as fewer rows
+    (
+        ["fidelity", "{in}/cut_sweep.csv"],
+        "cut_sweep.csv: not a sweep table (its last line has no newline: a torn write or a cut "
+        "copy?)",
+    ),
+    (["fidelity", "{in}/empty.csv"], "empty.csv: is empty, not a results table"),
+    (["fidelity", "{in}/cut_header.csv"], "cut_header.csv: not a results table (no whole header"),
+    (["fidelity", "{in}/header_only.csv"], "header_only.csv: a header and no row"),
+    (["fidelity", "{in}/narrow_line.csv"], "narrow_line.csv: line 2 has 2 fields, not"),
+    (["fidelity", "{in}/a_file"], "a_file: not a results table (its first line is not a header"),
     # robot spec files
     ([*ROBOT, "{in}/nan_com.toml"], "links.thigh.com nan m: must lie in [-5, 5] m"),
     ([*ROBOT, "{in}/inf_com.toml"], "links.thigh.com -inf m: must lie in [-5, 5] m"),
@@ -559,3 +592,22 @@ def test_slip_with_no_friction_limit_is_judged_without_a_warning():
         warnings.simplefilter("error")
         events, slide = slip_events(walk, np.inf)
     assert np.all(np.isfinite(slide)) and all(e.kind == "slip" for e in events)
+
+
+# Words that mislead: what a run prints says what it means, in the user's units.
+
+
+def test_a_trial_summary_says_na_never_nan_and_names_the_margins_polygon(tmp_path, capsys):
+    """A knee limited to 1.0 rad: the robot is lost while settling, so no loaded foot
+    rocks during the walk and its largest tilt does not exist: 'n/a', as the fields
+    beside it (it printed 'nan deg'). The simulated CoP's margin is measured against
+    the *planned* support polygon, and the line says so."""
+    robot = tmp_path / "knee.toml"
+    robot.write_text(_spec("knee = [-0.10, 2.60]", "knee = [-0.10, 1.0]"))
+    argv = [*PLAN, "--steps", "1", "--robot", str(robot), "--out", str(tmp_path / "t.json")]
+    code, err, out = _refused(["trial", *argv[1:]], capsys)
+    assert code == 0, err
+    (simulated,) = [line for line in out.splitlines() if line.startswith("simulated:")]
+    assert "loaded foot tilted up to n/a deg" in simulated
+    assert "nan" not in out.lower()
+    assert "min CoP margin     n/a mm (to the planned support polygon)" in simulated

@@ -1,8 +1,16 @@
 """The command line as a user meets it: one-line refusals, whole output files."""
 
+import fcntl
 import json
+import os
+import pty
+import select
+import signal
+import struct
 import subprocess
 import sys
+import termios
+import time
 
 import numpy as np
 import pytest
@@ -85,3 +93,216 @@ def test_plan_reports_a_knee_beyond_its_limit(tmp_path):
     assert "swing_knee leaves its limits [-0.1, 1.2] rad (knee), up to" in run.stdout
     default = _run("plan", "--step-time", "1", "--out", str(tmp_path / "q.npz"))
     assert "predicted: stable" in default.stdout
+
+
+def _until(fd: int, marker: bytes | None, timeout: float) -> bytes:
+    """What a pty's reader gets until ``marker`` (None: until every writer is gone)."""
+    seen, deadline = b"", time.monotonic() + timeout
+    while marker is None or marker not in seen:
+        left = deadline - time.monotonic()
+        if left <= 0 or not select.select([fd], [], [], left)[0]:
+            raise AssertionError(f"no {marker!r} within {timeout} s: {seen[-2000:]!r}")
+        try:
+            chunk = os.read(fd, 4096)
+        except OSError:  # EIO: every writer closed (Linux)
+            chunk = b""
+        if not chunk:
+            if marker is None:
+                return seen
+            raise AssertionError(f"ended before {marker!r}: {seen[-2000:]!r}")
+        seen += chunk
+    return seen
+
+
+@pytest.mark.parametrize("delay", [0.3, 0.9, 1.7])
+def test_ctrl_c_during_optimize_is_one_line_and_130(delay, tmp_path):
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) while the GA runs.
+
+    About 80 % of a generation is spent in the compiled kernel; a SIGINT there used to
+    surface inside numba's ``_numba_unpickle`` as a SystemError traceback, exit 1. The
+    GA has started when its progress bar (stderr is a terminal here) appears; the
+    signal comes ``delay`` s later. The default population keeps the kernel's share."""
+    controller, terminal = pty.openpty()
+    # a new pty is 0 columns wide, and tqdm draws nothing in 0 columns
+    fcntl.ioctl(terminal, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+    out = tmp_path / "o.json"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "slopewalk.bench.cli", "optimize", "--slope", "10",
+         "--generations", "100000", "--out", str(out)],
+        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=terminal,
+        start_new_session=True, cwd=tmp_path,
+    )  # fmt: skip
+    os.close(terminal)
+    try:
+        seen = _until(controller, b"GA:", timeout=120)
+        time.sleep(delay)
+        os.killpg(proc.pid, signal.SIGINT)
+        seen += _until(controller, None, timeout=60)
+        assert proc.wait(timeout=60) == 130, seen.decode(errors="replace")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        os.close(controller)
+    err = seen.decode(errors="replace").replace("\r\n", "\n")
+    assert "Traceback" not in err and "SystemError" not in err, err
+    assert err.endswith("\nslopewalk: interrupted\n"), repr(err)
+    assert proc.stdout is not None and proc.stdout.read() == b""
+    assert not out.exists()
+
+
+def _user_env() -> dict:
+    """The environment of a user's shell: stdout to a pipe block-buffered, as Python has it."""
+    return {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+
+
+SMALL_SWEEP = "steps = 1\n[grid]\nstep_time = [0.3, 0.35, 0.4]\n"
+
+
+def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
+    """``slopewalk sweep s.toml --out r 2>&1 | head -1``: the reader goes after one line.
+
+    The run used to end silently with exit 1 (the progress line's BrokenPipeError, then
+    the error message's own). Now it stops as a filter stops on SIGPIPE: exit 141, the
+    finished rows kept in the partial table, and ``--resume`` finishes it."""
+    config, out = tmp_path / "s.toml", tmp_path / "r"
+    config.write_text(SMALL_SWEEP)
+    argv = [sys.executable, "-m", "slopewalk.bench.cli", "sweep", str(config), "--out", str(out)]
+    proc = subprocess.Popen(
+        [*argv, "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    first = proc.stdout.readline()  # head -1
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == 141
+    assert first.startswith(b"sweep: 3 trials, 0 already done")
+    assert not (out / "sweep.csv").exists()
+    kept = (out / "sweep.partial.csv").read_bytes().count(b"\n") - 1  # the header's
+    assert kept >= 1
+    again = subprocess.run(
+        [*argv, "--resume", "--workers", "1"], capture_output=True, text=True, timeout=300,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    assert f"{kept} already done" in again.stdout
+    assert (out / "sweep.csv").read_bytes().count(b"\n") == 4
+
+
+@pytest.mark.parametrize("command", ["plan", "sweep"])
+def test_a_closed_stdout_ends_quietly_with_141_after_the_work(command, tmp_path):
+    """``slopewalk plan ... | true``: stdout's reader is gone before the first line. The
+    command does its work (stdout is written at its end), then stops quietly with 141:
+    no ``Exception ignored ... BrokenPipeError`` on stderr, no exit 120."""
+    (tmp_path / "s.toml").write_text(SMALL_SWEEP)
+    args = {
+        "plan": ["plan", "--step-time", "1", "--steps", "1", "--out", "p.npz"],
+        "sweep": ["sweep", "s.toml", "--out", "r", "--workers", "1"],
+    }[command]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "slopewalk.bench.cli", *args], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 141, err
+    assert "Traceback" not in err and "Exception ignored" not in err and "error" not in err, err
+    if command == "plan":
+        assert err == ""
+        assert np.load(tmp_path / "p.npz")["t"].size > 0
+    else:  # the sweep finished: only its summary was lost, so no word of --resume
+        assert "--resume" not in err
+        assert (tmp_path / "r" / "sweep.csv").read_bytes().count(b"\n") == 4
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+
+
+def _options(command: str) -> list[str]:
+    from slopewalk.bench.cli import build_parser
+
+    parser = build_parser()._subparsers._group_actions[0].choices[command]
+    return [o for a in parser._actions for o in a.option_strings if o not in ("-h", "--help")]
+
+
+def test_the_readme_synopsis_and_flag_table_name_every_gait_flag():
+    """``plan``'s synopsis line lists every flag of ``plan``, and the flag table has a row
+    for each (``trial`` takes them as "gait flags as for plan"); --sway-share,
+    --pelvis-offset and --step-length were missing from both."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("## Command line") :]
+    synopsis = section[
+        section.index("```bash") : section.index("```", section.index("```bash") + 3)
+    ]
+    plan = synopsis[synopsis.index("slopewalk plan") : synopsis.index("slopewalk trial")]
+    table = [line for line in section.splitlines() if line.startswith("| `--")]
+    for flag in _options("plan"):
+        assert f"[{flag} " in plan or f"{flag} " in plan, f"{flag} not in plan's synopsis"
+        assert any(f"`{flag} " in row or f"`{flag}`" in row for row in table), flag
+    trial = synopsis[synopsis.index("slopewalk trial") : synopsis.index("slopewalk mjcf")]
+    assert "[gait flags as for plan]" in trial
+    for flag in set(_options("trial")) - set(_options("plan")):
+        assert flag in trial, f"{flag} not in trial's synopsis"
+
+
+def _printed_names() -> dict[str, set[str]]:
+    """The names each ``slopewalk benchmark WHAT`` prints: the keys of the dicts its
+    functions return (read from the source, so nothing is run)."""
+    import ast
+
+    functions = {}
+    for path in (
+        ROOT / "bench" / "experiments" / "benchmark.py",
+        ROOT / "bench" / "experiments" / "envelope" / "benchmark.py",
+    ):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.FunctionDef) and node.name.endswith("_figures"):
+                keys = {
+                    k.value
+                    for ret in ast.walk(node)
+                    if isinstance(ret, ast.Return) and isinstance(ret.value, ast.Dict)
+                    for k in ret.value.keys
+                    if isinstance(k, ast.Constant)
+                }
+                functions[node.name] = keys
+    f = functions
+    return {
+        "planner": f["planner_figures"],
+        "sim": f["sim_figures"],
+        "ga": f["ga_figures"],
+        "sweep": f["grid_figures"] | f["sweep_figures"],
+        "controller": f["controller_figures"],
+        "envelope": f["envelope_figures"],
+    }
+
+
+def test_every_benchmark_figure_is_documented_in_its_section():
+    """``benchmark`` printed names such as ``ratio`` with no word of what they are:
+    docs/benchmark.md has a row per name, in the section of its benchmark, and the
+    command's help points there."""
+    from slopewalk.bench.cli import build_parser
+
+    doc = (ROOT / "docs" / "benchmark.md").read_text()
+    names = _printed_names()
+    choices = build_parser()._subparsers._group_actions[0].choices
+    what = [a for a in choices["benchmark"]._actions if a.dest == "what"][0]
+    assert set(names) == set(what.choices)
+    for benchmark, keys in names.items():
+        assert keys, benchmark
+        start = doc.index(f"## `{benchmark}`")
+        end = doc.find("\n## ", start + 1)
+        section = doc[start : end if end > 0 else None]
+        rows = {line.split("|")[1].strip().strip("`") for line in section.splitlines()[1:]
+                if line.startswith("| `")}  # fmt: skip
+        assert rows == keys, (benchmark, keys ^ rows)
+    assert "docs/benchmark.md" in choices["benchmark"].format_help()
+    assert "docs/envelope-format.md" in choices["envelope"].format_help()
+    assert "envelope_config.py" not in choices["envelope"].format_help()
+    assert "](docs/benchmark.md)" in (ROOT / "README.md").read_text()
+
+
+def test_the_tilt_help_gives_the_nominal_number():
+    from slopewalk.bench.cli import build_parser
+
+    text = build_parser()._subparsers._group_actions[0].choices["plan"].format_help()
+    assert "(default 12, every robot's nominal gait)" in " ".join(text.split())

@@ -30,6 +30,8 @@ Two ways to run them:
 ``interruptible()`` turns SIGTERM (and SIGINT) into an ``Interrupted``
 exception in the main thread, so a terminated run stops like a Ctrl-C one:
 the caller keeps what it has written and exits non-zero with one line.
+``held_interrupts()`` holds a Ctrl-C until the end of a block of compiled calls
+(numba would turn it into a ``SystemError``; see there).
 The progress display that goes with it is ``progress.py``.
 """
 
@@ -130,6 +132,37 @@ def _deferred_stop() -> Iterator[None]:
     pending, _stop["pending"] = _stop["pending"], None
     if pending is not None and not _stop["defer"]:
         raise Interrupted(pending)
+
+
+@contextlib.contextmanager
+def held_interrupts() -> Iterator[None]:
+    """Within the block a Ctrl-C (SIGINT) is held, and raised when the block ends.
+
+    For blocks that call compiled code which calls back into Python on its way
+    out: numba boxes the arrays a kernel returns through ``_numba_unpickle``, the
+    first Python code run after a long kernel, so a Ctrl-C during the kernel
+    raises its ``KeyboardInterrupt`` inside that callback, and numba turns it
+    into ``SystemError: ... returned a result with an exception set``: a
+    traceback where the user should read ``slopewalk: interrupted``. Held, it is
+    raised between two kernel calls instead. Under ``interruptible()`` its stop
+    signals are held the same way (``_deferred_stop``); an ignored SIGINT (a
+    pool worker's) stays ignored; outside the main thread nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        with _deferred_stop():
+            yield
+        return
+    held: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, _frame: held.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if held:
+        raise KeyboardInterrupt
 
 
 def death_cause(exitcode: int | None) -> str:

@@ -173,9 +173,9 @@ class TrialResult:
                 f"{e.kind} at {e.time:.3f} s: {e.cause}" for e in self.predicted_events[:2]
             ),
             f"simulated: {self.simulated_verdict:<12} min CoP margin "
-            f"{_mm(self.simulated_min_margin):>7} mm, max friction ratio "
-            f"{_num(self.simulated_max_friction_ratio, '.3f')}, loaded foot tilted up to "
-            f"{np.rad2deg(self.simulated_max_tilt):.2f} deg (tip angle "
+            f"{_mm(self.simulated_min_margin):>7} mm (to the planned support polygon), max "
+            f"friction ratio {_num(self.simulated_max_friction_ratio, '.3f')}, loaded foot "
+            f"tilted up to {_num(np.rad2deg(self.simulated_max_tilt), '.2f')} deg (tip angle "
             f"{np.rad2deg(TIP_ANGLE):g} deg)",
             f"ZMP analytic vs simulated: RMS {_mm(self.zmp_rms)} mm, max "
             f"{_mm(self.zmp_max)} mm over {self.standing_fraction:.0%} of the walk",

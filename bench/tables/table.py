@@ -92,7 +92,13 @@ class TableFormat:
         return buffer.getvalue().encode()
 
     def parse(
-        self, data: bytes, path: Path, *, torn_ok: bool = False, previous_ok: bool = False
+        self,
+        data: bytes,
+        path: Path,
+        *,
+        torn_ok: bool = False,
+        previous_ok: bool = False,
+        hint: str = "; move it away or choose another --out",
     ) -> tuple[dict[str, bytes], int]:
         """The rows of a table (by id, last one wins) and the length of its whole lines.
 
@@ -102,12 +108,13 @@ class TableFormat:
             torn_ok: Accept a last line without its newline (left out of the rows).
             previous_ok: Accept a table of ``previous_layouts`` too (checked the
                 same way), which a fresh run may replace; its rows are not returned.
+            hint: Appended to a refusal of the whole file: what a run that would
+                write there can do ("" for a reader).
 
         Raises:
             TableError: ``data`` is not such a table (module doc), naming what is wrong.
         """
         where = f"{path}: not {self.article} table"
-        hint = "; move it away or choose another --out"
         try:
             data.decode()
         except UnicodeDecodeError as err:
@@ -134,7 +141,9 @@ class TableFormat:
             raise TableError(f"{where} ({what}){hint}")
         whole = data.rfind(b"\n") + 1
         if whole < len(data) and not torn_ok:
-            raise TableError(f"{where} (its last line has no newline: a torn write?){hint}")
+            raise TableError(
+                f"{where} (its last line has no newline: a torn write or a cut copy?){hint}"
+            )
         rows: dict[str, bytes] = {}
         lines = data[data.index(b"\n") + 1 : whole].split(b"\n")[:-1]
         id_column = expected[0]
@@ -290,14 +299,30 @@ def _locked(path: Path, kind: str = "sweep") -> int:
 
 
 def read_table(path: str | Path) -> list[dict]:
-    """The rows of a results table with numbers as floats and "none" scaling as "".
+    """The rows of a finished results table, in file order, with numbers as floats and
+    "none" scaling as "".
 
-    For analysis (``claims.py``); the sweep itself keeps rows as text.
+    For analysis (``claims.py``, ``fidelity.py``); the runs themselves keep rows as
+    text. The file is checked whole first (``TableFormat.parse`` with the columns its
+    header names, the first an id column): a truncated copy (``head -c``), an empty
+    file, a cut header, a line of another width or a table without rows is refused
+    in one line naming the file, never read as fewer or emptier rows.
+
+    Raises:
+        TableError: the file cannot be read or is not a whole table (above).
     """
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise TableError(f"{path}: is a directory, not a results table") from None
+    except OSError as err:
+        raise TableError(f"{path}: cannot read ({err.strerror})") from None
+    rows = _own_format(data, path).parse(data, path, hint="")[0]
+    if not rows:
+        raise TableError(f"{path}: a header and no row (an unfinished or emptied table?)")
     out = []
-    for row in rows:
+    for row in csv.DictReader(io.StringIO(data.decode(), newline="")):
         typed: dict[str, float | str] = {}
         for key, value in row.items():
             try:
@@ -308,3 +333,27 @@ def read_table(path: str | Path) -> list[dict]:
             typed["mass_scale"] = "" if row["mass_scale"] == "none" else row["mass_scale"]
         out.append(typed)
     return out
+
+
+_KINDS = {"trial_id": "sweep", "cell_id": "envelope"}  # a table's id column -> what wrote it
+
+
+def _own_format(data: bytes, path: Path) -> TableFormat:
+    """The ``TableFormat`` of the columns ``data``'s header names (``read_table``)."""
+    if not data:
+        raise TableError(f"{path}: is empty, not a results table")
+    if b"\n" not in data:
+        raise TableError(f"{path}: not a results table (no whole header line: cut short?)")
+    try:
+        first = data.split(b"\n", 1)[0].decode()
+    except UnicodeDecodeError as err:
+        raise TableError(
+            f"{path}: not a results table (not UTF-8 text: byte {err.start})"
+        ) from None
+    columns = tuple(next(csv.reader([first]), []))
+    if not columns or not columns[0].endswith("_id") or len(set(columns)) != len(columns):
+        raise TableError(
+            f"{path}: not a results table (its first line is not a header of distinct column "
+            "names, the first an id column such as trial_id)"
+        )
+    return TableFormat(_KINDS.get(columns[0], "results"), columns)

@@ -34,6 +34,10 @@ Mapping of the paper's MATLAB ``ga`` settings onto pymoo 0.6:
 * seed → ``seed=`` of the algorithm: pymoo 0.6 draws every random number from
   one ``numpy.random.Generator`` seeded with it, and the planner is
   deterministic, so a seed fixes the run bit for bit.
+
+A Ctrl-C is held until the generation's compiled evaluation has returned
+(``batch.executor.held_interrupts``) and raised as ``KeyboardInterrupt`` between
+two generations.
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
 from tqdm import tqdm
 
+from slopewalk.bench.batch.executor import held_interrupts
 from slopewalk.bench.experiments.ga.operators import ArrayDuplicates, ArrayGA
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait_search import CONSTRAINTS, objectives, pareto_objectives
@@ -243,7 +248,8 @@ def _drive(algorithm, pymoo_problem, settings: GaSettings, progress: bool, label
     with bar or contextlib.nullcontext():
         while algorithm.has_next():
             before = len(log)
-            algorithm.next()
+            with held_interrupts():  # a Ctrl-C stops the run between generations
+                algorithm.next()
             batches.append(sum(len(x) for x in log[before:]))
             if bar is not None:
                 bar.update(1)
@@ -282,7 +288,8 @@ def random_search(problem, settings: GaSettings) -> RunResult:
     start = time.perf_counter()
     for _ in range(settings.generations):
         X = xl + rng.random((settings.population, xl.size)) * (xu - xl)
-        m = problem.measure(X)
+        with held_interrupts():
+            m = problem.measure(X)
         F, G = objectives(m, settings.constraint)
         log.add(X, m, F, np.zeros(len(X)) if G is None else np.maximum(G, 0).sum(axis=1))
     return _result(log, time.perf_counter() - start, [settings.population] * settings.generations)
