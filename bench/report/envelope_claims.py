@@ -225,6 +225,56 @@ def family_boundaries(rows) -> dict[str, dict]:
     return out
 
 
+def walked_intervals(rows, key: str, mode: str) -> list[tuple[float, float]]:
+    """The runs of consecutive grid values of ``key`` in ``rows`` that MuJoCo walks in
+    ``mode``, as (first, last) pairs in ascending order: the grid's own neighbours decide
+    where a run breaks (a value the grid holds but the mode does not walk)."""
+    values = sorted({r[key] for r in rows})
+    walked = {r[key] for r in rows if _walks(r, mode)}
+    runs: list[tuple[float, float]] = []
+    start = None
+    for i, value in enumerate(values):
+        if value in walked and start is None:
+            start = value
+        if start is not None and (value not in walked or i == len(values) - 1):
+            last = value if value in walked else values[i - 1]
+            runs.append((start, last))
+            start = None
+    return runs
+
+
+def _intervals_text(runs: list[tuple[float, float]], unit: str) -> str:
+    if not runs:
+        return "none"
+    return ", ".join(f"{a:g}{unit}" if a == b else f"{a:g}{unit} to {b:g}{unit}" for a, b in runs)
+
+
+def _walked_interval_lines(rows) -> list[str]:
+    """Per family and mode: every slope walked at t_c = 1 s and every flat step time walked,
+    as intervals of the grid, since the steepest or fastest alone hides the gaps below it."""
+    lines = [
+        "",
+        "Walked, as intervals of the grid (the steepest or fastest value alone hides the cells "
+        "below it that MuJoCo does not walk):",
+        "",
+        f"| family | mode | slopes walked at t_c = {NOMINAL_STEP_TIME:g} s | "
+        "flat step times walked |",
+        "|---|---|---|---|",
+    ]
+    families = sorted({r["family"] for r in rows}, key=lambda f: (f != "paper", f))
+    for family in families:
+        sub = _of_family(rows, family)
+        line = [r for r in sub if r["step_time"] == NOMINAL_STEP_TIME]
+        flat = [r for r in sub if r["slope_deg"] == 0.0]
+        for mode in _modes(sub):
+            lines.append(
+                f"| {family} | {mode} | "
+                f"{_intervals_text(walked_intervals(line, 'slope_deg', mode), '°')} | "
+                f"{_intervals_text(walked_intervals(flat, 'step_time', mode), ' s')} |"
+            )
+    return lines
+
+
 def boundaries_markdown(rows, source: str) -> str:
     """``boundaries.md``: ``family_boundaries`` as a table, one row per family."""
 
@@ -260,6 +310,7 @@ def boundaries_markdown(rows, source: str) -> str:
     lines += [
         "",
         "*(grid edge)*: the boundary lies at or beyond the grid's last step time or slope.",
+        *_walked_interval_lines(rows),
     ]
     return "\n".join(lines) + "\n"
 

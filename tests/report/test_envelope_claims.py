@@ -1,6 +1,11 @@
 """Claims 1 and 2 from the envelope: the fastest flat step time, the steepest slopes at 1 s."""
 
-from slopewalk.bench.report.envelope_claims import envelope_cell_note, envelope_claims
+from slopewalk.bench.report.envelope_claims import (
+    boundaries_markdown,
+    envelope_cell_note,
+    envelope_claims,
+    walked_intervals,
+)
 
 
 def _row(t, s, feasible, walks):
@@ -86,3 +91,14 @@ def test_boundaries_are_given_per_family():
     assert "| paper | 0.5 s | stiff 0.7 s, servo none | 22.5° | -10° |" in text
     assert "| extended | 0.3 s (grid edge) | stiff none, servo none | 30° (grid edge) | " in text
     assert b["paper"]["edges"] == {"flat": 0.4, "up": 25.0, "down": -20.0}
+
+
+def test_walked_intervals_break_at_a_grid_value_that_is_not_walked():
+    """Slopes -5, 0, 5, 10, 15 at 1 s, walked at -5, 5, 10 and 15: two runs, not 'up to 15'."""
+    rows = [_row(1.0, s, True, s != 0.0) for s in (-5.0, 0.0, 5.0, 10.0, 15.0)]
+    assert walked_intervals(rows, "slope_deg", "stiff") == [(-5.0, -5.0), (5.0, 15.0)]
+    assert walked_intervals(rows, "slope_deg", "servo") == []  # servo tips everywhere
+    text = boundaries_markdown(rows, "e.toml")
+    assert "| paper | stiff | -5° to -5°" not in text
+    assert "| paper | stiff | -5°, 5° to 15° |" in text
+    assert "| paper | servo | none |" in text
