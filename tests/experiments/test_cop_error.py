@@ -64,6 +64,7 @@ def test_the_windows_share_out_the_whole_mean_square(plan):
     assert rms == pytest.approx(case.result.zmp_rms)
 
 
+@pytest.mark.slow  # the whole report: about 60 s of flat walks; .ci/run runs it on its own
 def test_the_report_names_its_command_and_every_case(spec):
     text = cop_error_report(spec, command="slopewalk cop-error --out x.md")
     assert "Written by `slopewalk cop-error --out x.md`" in text
