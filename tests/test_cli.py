@@ -188,6 +188,36 @@ def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
     assert (out / "sweep.csv").read_bytes().count(b"\n") == 4
 
 
+def test_an_envelope_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
+    """``slopewalk envelope small.toml --out r 2>&1 | head -1``, the issue's own case: the
+    same stop as the sweep's (exit 141, finished cells kept), and ``--resume`` finishes."""
+    config, out = tmp_path / "e.toml", tmp_path / "r"
+    config.write_text(
+        'steps = 1\n[grid]\nstep_time = [1.0, 0.5]\nslope = [0, 15]\nactuators = ["stiff"]\n'
+        "[search]\npopulation = 6\ngenerations = 2\n"
+    )
+    argv = [sys.executable, "-m", "slopewalk.bench.cli", "envelope", str(config), "--out", str(out)]
+    proc = subprocess.Popen(
+        [*argv, "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    first = proc.stdout.readline()  # head -1
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == 141
+    assert first.startswith(b"envelope: 4 cells, 0 already done")
+    assert not (out / "envelope.csv").exists()
+    kept = (out / "envelope.partial.csv").read_bytes().count(b"\n") - 1  # the header's
+    assert kept >= 1
+    again = subprocess.run(
+        [*argv, "--resume", "--workers", "1"], capture_output=True, text=True, timeout=300,
+        env=_user_env(), cwd=tmp_path,
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    assert f"{kept} already done" in again.stdout
+    assert (out / "envelope.csv").read_bytes().count(b"\n") == 5
+
+
 @pytest.mark.parametrize("command", ["plan", "sweep"])
 def test_a_closed_stdout_ends_quietly_with_141_after_the_work(command, tmp_path):
     """``slopewalk plan ... | true``: stdout's reader is gone before the first line. The
