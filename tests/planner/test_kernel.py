@@ -234,6 +234,7 @@ def test_ga_margin_is_the_walk_minimum(spec):
         print(f"{slope_deg:6.1f}: {err:.2e}  {n_far:3d}  {above:.4f}")
 
 
+@pytest.mark.slow  # compiles the kernel cold in a fresh HOME (about 30 s); .ci/run runs it
 def test_kernel_runs_from_a_read_only_copy_and_caches_in_the_user_cache(tmp_path):
     """A read-only install, no NUMBA_CACHE_DIR: compiled code goes to ~/.cache/slopewalk/numba."""
     install = tmp_path / "site"
