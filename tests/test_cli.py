@@ -158,15 +158,25 @@ def _user_env() -> dict:
 SMALL_SWEEP = "steps = 1\n[grid]\nstep_time = [0.3, 0.35, 0.4]\n"
 
 
-def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
-    """``slopewalk sweep s.toml --out r 2>&1 | head -1``: the reader goes after one line.
+SMALL_ENVELOPE = (
+    'steps = 1\n[grid]\nstep_time = [1.0, 0.5]\nslope = [0, 15]\nactuators = ["stiff"]\n'
+    "[search]\npopulation = 6\ngenerations = 2\n"
+)
+
+
+@pytest.mark.parametrize(
+    "command, config, rows", [("sweep", SMALL_SWEEP, 3), ("envelope", SMALL_ENVELOPE, 4)]
+)
+def test_a_run_whose_output_pipe_closes_stops_with_141_and_resumes(command, config, rows, tmp_path):
+    """``slopewalk sweep|envelope FILE --out r 2>&1 | head -1``: the reader goes after one
+    line.
 
     The run used to end silently with exit 1 (the progress line's BrokenPipeError, then
     the error message's own). Now it stops as a filter stops on SIGPIPE: exit 141, the
     finished rows kept in the partial table, and ``--resume`` finishes it."""
-    config, out = tmp_path / "s.toml", tmp_path / "r"
-    config.write_text(SMALL_SWEEP)
-    argv = [sys.executable, "-m", "slopewalk.bench.cli", "sweep", str(config), "--out", str(out)]
+    path, out = tmp_path / "run.toml", tmp_path / "r"
+    path.write_text(config)
+    argv = [sys.executable, "-m", "slopewalk.bench.cli", command, str(path), "--out", str(out)]
     proc = subprocess.Popen(
         [*argv, "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
         env=_user_env(), cwd=tmp_path,
@@ -175,9 +185,10 @@ def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
     first = proc.stdout.readline()  # head -1
     proc.stdout.close()
     assert proc.wait(timeout=300) == 141
-    assert first.startswith(b"sweep: 3 trials, 0 already done")
-    assert not (out / "sweep.csv").exists()
-    kept = (out / "sweep.partial.csv").read_bytes().count(b"\n") - 1  # the header's
+    noun = "trials" if command == "sweep" else "cells"
+    assert first.startswith(f"{command}: {rows} {noun}, 0 already done".encode())
+    assert not (out / f"{command}.csv").exists()
+    kept = (out / f"{command}.partial.csv").read_bytes().count(b"\n") - 1  # the header's
     assert kept >= 1
     again = subprocess.run(
         [*argv, "--resume", "--workers", "1"], capture_output=True, text=True, timeout=300,
@@ -185,37 +196,7 @@ def test_a_sweep_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
     )  # fmt: skip
     assert again.returncode == 0, again.stderr
     assert f"{kept} already done" in again.stdout
-    assert (out / "sweep.csv").read_bytes().count(b"\n") == 4
-
-
-def test_an_envelope_whose_output_pipe_closes_stops_with_141_and_resumes(tmp_path):
-    """``slopewalk envelope small.toml --out r 2>&1 | head -1``, the issue's own case: the
-    same stop as the sweep's (exit 141, finished cells kept), and ``--resume`` finishes."""
-    config, out = tmp_path / "e.toml", tmp_path / "r"
-    config.write_text(
-        'steps = 1\n[grid]\nstep_time = [1.0, 0.5]\nslope = [0, 15]\nactuators = ["stiff"]\n'
-        "[search]\npopulation = 6\ngenerations = 2\n"
-    )
-    argv = [sys.executable, "-m", "slopewalk.bench.cli", "envelope", str(config), "--out", str(out)]
-    proc = subprocess.Popen(
-        [*argv, "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        env=_user_env(), cwd=tmp_path,
-    )  # fmt: skip
-    assert proc.stdout is not None
-    first = proc.stdout.readline()  # head -1
-    proc.stdout.close()
-    assert proc.wait(timeout=300) == 141
-    assert first.startswith(b"envelope: 4 cells, 0 already done")
-    assert not (out / "envelope.csv").exists()
-    kept = (out / "envelope.partial.csv").read_bytes().count(b"\n") - 1  # the header's
-    assert kept >= 1
-    again = subprocess.run(
-        [*argv, "--resume", "--workers", "1"], capture_output=True, text=True, timeout=300,
-        env=_user_env(), cwd=tmp_path,
-    )  # fmt: skip
-    assert again.returncode == 0, again.stderr
-    assert f"{kept} already done" in again.stdout
-    assert (out / "envelope.csv").read_bytes().count(b"\n") == 5
+    assert (out / f"{command}.csv").read_bytes().count(b"\n") == rows + 1
 
 
 @pytest.mark.parametrize("command", ["plan", "sweep"])
