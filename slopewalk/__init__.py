@@ -35,7 +35,7 @@ _API = {
     "Plan": "slopewalk.planner.plan",
     "plan_walk": "slopewalk.planner.plan",
     "evaluate": "slopewalk.planner.plan",
-    "ACTUATOR_MODES": "slopewalk.bench.sim.model",
+    "ACTUATOR_MODES": "slopewalk.bench.actuators",
     "TrialSpec": "slopewalk.bench.sim.trial_spec",
     "TrialResult": "slopewalk.bench.sim.trial",
     "run_trial": "slopewalk.bench.sim.trial",
@@ -64,11 +64,11 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from slopewalk.bench.actuators import ACTUATOR_MODES
     from slopewalk.bench.experiments.envelope.config import load_envelope
     from slopewalk.bench.experiments.envelope.run import run_envelope
     from slopewalk.bench.experiments.sweep.config import load_sweep
     from slopewalk.bench.experiments.sweep.run import run_sweep
-    from slopewalk.bench.sim.model import ACTUATOR_MODES
     from slopewalk.bench.sim.trial import TrialResult, run_trial
     from slopewalk.bench.sim.trial_spec import TrialSpec
     from slopewalk.planner.errors import SlopewalkError

@@ -172,12 +172,7 @@ class TableFormat:
     def read_rows(self, path: str | Path, *, previous_ok: bool = False) -> dict[str, bytes]:
         """The rows of a finished table (``parse``), by id."""
         path = Path(path)
-        try:
-            data = path.read_bytes()
-        except IsADirectoryError:
-            raise TableError(f"{path}: is a directory, not {self.article} table") from None
-        except OSError as err:
-            raise TableError(f"{path}: cannot read ({err.strerror})") from None
+        data = _read_bytes(path, f"{self.article} table")
         return self.parse(data, path, previous_ok=previous_ok)[0]
 
     def fields(self, line: bytes, *columns: str) -> tuple[str, ...]:
@@ -298,6 +293,17 @@ def _locked(path: Path, kind: str = "sweep") -> int:
     raise TableError(f"{path}: removed as it was opened, three times (another {kind} finishing?)")
 
 
+def _read_bytes(path: Path, what: str) -> bytes:
+    """The bytes of the table file ``path``; a directory or an unreadable file is one
+    TableError line (``what``: what it should be, e.g. "a sweep table")."""
+    try:
+        return path.read_bytes()
+    except IsADirectoryError:
+        raise TableError(f"{path}: is a directory, not {what}") from None
+    except OSError as err:
+        raise TableError(f"{path}: cannot read ({err.strerror})") from None
+
+
 def read_table(path: str | Path) -> list[dict]:
     """The rows of a finished results table, in file order, with numbers as floats and
     "none" scaling as "".
@@ -312,12 +318,7 @@ def read_table(path: str | Path) -> list[dict]:
         TableError: the file cannot be read or is not a whole table (above).
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except IsADirectoryError:
-        raise TableError(f"{path}: is a directory, not a results table") from None
-    except OSError as err:
-        raise TableError(f"{path}: cannot read ({err.strerror})") from None
+    data = _read_bytes(path, "a results table")
     rows = _own_format(data, path).parse(data, path, hint="")[0]
     if not rows:
         raise TableError(f"{path}: a header and no row (an unfinished or emptied table?)")
