@@ -100,7 +100,9 @@ def compile_model(path: str | Path) -> mujoco.MjModel:
         return mujoco.MjModel.from_xml_path(str(path))
     except ValueError as err:
         lines = [line.strip() for line in str(err).splitlines() if line.strip()]
-        raise RobotImportError(f"model {str(path)!r}: MuJoCo refused it: {'; '.join(lines)}") from None
+        raise RobotImportError(
+            f"model {str(path)!r}: MuJoCo refused it: {'; '.join(lines)}"
+        ) from None
 
 
 def fit_model(path: str | Path, robot_map: RobotMap | None = None) -> Fit:
@@ -137,8 +139,12 @@ def fit_model(path: str | Path, robot_map: RobotMap | None = None) -> Fit:
     return _measured(fit, data, frame, misfits)
 
 
-_HINGE, _SLIDE, _FREE, _BALL = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE),
-                                int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))
+_HINGE, _SLIDE, _FREE, _BALL = (
+    int(mujoco.mjtJoint.mjJNT_HINGE),
+    int(mujoco.mjtJoint.mjJNT_SLIDE),
+    int(mujoco.mjtJoint.mjJNT_FREE),
+    int(mujoco.mjtJoint.mjJNT_BALL),
+)
 
 
 def reference_qpos(model: mujoco.MjModel, held: dict[str, float]) -> np.ndarray:
@@ -246,7 +252,8 @@ def _chain_joints(model, foot: int, base: int, side: str) -> list[int]:
     path = _ancestors(model, foot)
     if base not in path:
         raise RobotImportError(
-            f"{side} foot {model.body(foot).name!r}: not below the base body {model.body(base).name!r}"
+            f"{side} foot {model.body(foot).name!r}: not below the base body "
+            f"{model.body(base).name!r}"
         )
     bodies = path[: path.index(base)][::-1]
     joints = []
@@ -284,8 +291,11 @@ def _leg_joints(model, data, frame, chain, named, side) -> dict[str, LegJoint]:
     else:
         found = _detect(model, chain, axes, side)
     positions = [chain.index(found[k]) for k in JOINT_LIMIT_KEYS]
-    for (k1, p1), (k2, p2) in zip(zip(JOINT_LIMIT_KEYS, positions),
-                                  zip(JOINT_LIMIT_KEYS[1:], positions[1:]), strict=False):  # fmt: skip
+    for i in range(3):
+        (k1, p1), (k2, p2) = (
+            (JOINT_LIMIT_KEYS[i], positions[i]),
+            (JOINT_LIMIT_KEYS[i + 1], positions[i + 1]),
+        )
         if p2 <= p1:
             raise RobotImportError(
                 f"{side} {_WORDS[k2]} {model.joint(found[k2]).name!r} comes before the "
@@ -304,8 +314,9 @@ def _leg_joints(model, data, frame, chain, named, side) -> dict[str, LegJoint]:
         j = found[kind]
         axis = axes[j]
         want = _AXES[_KIND_AXIS[kind]]
-        legs[kind] = LegJoint(model.joint(j).name, j, int(model.jnt_bodyid[j]),
-                              float(np.sign(axis[want])), frame.point(data.xanchor[j]), axis)  # fmt: skip
+        sign = float(np.sign(axis[want]))
+        anchor = frame.point(data.xanchor[j])
+        legs[kind] = LegJoint(model.joint(j).name, j, int(model.jnt_bodyid[j]), sign, anchor, axis)
     return legs
 
 
@@ -322,14 +333,21 @@ def _detect(model, chain, axes, side) -> dict[str, int]:
     names = [model.joint(j).name for j in chain]
     rolls = [i for i, k in enumerate(kinds) if k == "x"]
     pitches = [i for i, k in enumerate(kinds) if k == "y"]
-    if not rolls or (pitches and rolls[-1] < pitches[-1] and not any(r > pitches[-1] for r in rolls)):
-        if not rolls or not pitches:
-            raise RobotImportError(f"{side} leg: no ankle roll joint (joints {', '.join(names)})")
+    after = [i for i in rolls if pitches and i > pitches[-1]]
+    if not after:
+        above = pitches[-2] if len(pitches) > 1 else -1
+        between = [i for i in rolls if pitches and above < i < pitches[-1]]
+        if between:
+            raise RobotImportError(
+                f"{side} ankle roll {names[between[-1]]!r} comes before the ankle pitch "
+                f"{names[pitches[-1]]!r} (from the hip down); the planner's ankle is pitch, "
+                "then roll"
+            )
         raise RobotImportError(
-            f"{side} ankle roll {names[rolls[-1]]!r} comes before the ankle pitch "
-            f"{names[pitches[-1]]!r} (from the hip down); the planner's ankle is pitch, then roll"
+            f"{side} leg: no ankle roll joint below its last pitch joint "
+            f"(joints {', '.join(names)})"
         )
-    roll = rolls[-1]
+    roll = after[0]
     before = [i for i in pitches if i < roll]
     if len(before) < 3:
         raise RobotImportError(
@@ -434,7 +452,8 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
     if not (x0 < 0 < x1 and y0 < 0 < y1):
         raise RobotImportError(
             f"left foot {model.body(fit.feet['left']).name!r}: the ankle centre is not above "
-            f"its sole (sole x {x0 * 1e3:.1f}..{x1 * 1e3:.1f} mm, y {y0 * 1e3:.1f}..{y1 * 1e3:.1f} mm)"
+            f"its sole (sole x {x0 * 1e3:.1f}..{x1 * 1e3:.1f} mm, "
+            f"y {y0 * 1e3:.1f}..{y1 * 1e3:.1f} mm)"
         )
     geometry = {
         "thigh": thigh, "shank": shank, "hip_width": y_left - y_right,

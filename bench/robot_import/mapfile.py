@@ -39,7 +39,6 @@ class RobotImportError(SlopewalkError):
     """A model or map file that does not fit the planner, refused in one line."""
 
 
-
 @dataclass(frozen=True)
 class RobotMap:
     """What the user named (``None`` / empty: detect it)."""

@@ -37,8 +37,10 @@ def imported_spec(fit: Fit, robot_map: RobotMap | None = None) -> tuple[dict, li
         mirror = mirrored(right[name])
         asym = max(abs(mirror.mass - links[name].mass) / links[name].mass,
                    float(np.abs(mirror.com - links[name].com).max()))  # fmt: skip
-        notes.append(f"links.{name}: the right leg's differs from the mirrored left's by "
-                     f"{asym:.3g} (relative mass, or m of CoM); the spec mirrors the left")  # fmt: skip
+        notes.append(
+            f"links.{name}: the right leg's differs from the mirrored left's by "
+            f"{asym:.3g} (relative mass, or m of CoM); the spec mirrors the left"
+        )
     data = {
         "name": fit.name,
         "geometry": {k: float(v) for k, v in fit.geometry.items()},
@@ -97,8 +99,10 @@ def _servo(fit: Fit, robot_map: RobotMap, notes: list[str]) -> dict[str, float]:
             notes.append(f"servo.{key}: {out[key]:g} from the map file")
         elif key == "no_load_speed" and min(damping) > 0 and "stall_torque" in out:
             out[key] = out["stall_torque"] / float(np.mean(damping))
-            notes.append(f"servo.no_load_speed: stall torque / joint damping "
-                         f"{np.mean(damping):.4g} N m s/rad (spread {np.ptp(damping):.3g})")  # fmt: skip
+            notes.append(
+                f"servo.no_load_speed: stall torque / joint damping "
+                f"{np.mean(damping):.4g} N m s/rad (spread {np.ptp(damping):.3g})"
+            )
         elif len(values) == len(joints):
             out[key] = float(np.mean(values))
             notes.append(f"servo.{key}: mean of the 8 planned joints' {out[key]:.6g} "
@@ -112,19 +116,34 @@ def _servo(fit: Fit, robot_map: RobotMap, notes: list[str]) -> dict[str, float]:
 def position_actuator(model: mujoco.MjModel, joint: int) -> int | None:
     """The position actuator (gain kp, bias −kp q − kv q̇, gear 1) driving ``joint``, or None."""
     for a in range(model.nu):
-        if model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT or model.actuator_trnid[a, 0] != joint:
+        if (
+            model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT
+            or model.actuator_trnid[a, 0] != joint
+        ):
             continue
         kp = model.actuator_gainprm[a, 0]
-        if (model.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_AFFINE and kp > 0
-                and model.actuator_biasprm[a, 1] == -kp and model.actuator_gear[a, 0] == 1):  # fmt: skip
+        affine = model.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_AFFINE
+        if (
+            affine
+            and kp > 0
+            and model.actuator_biasprm[a, 1] == -kp
+            and model.actuator_gear[a, 0] == 1
+        ):
             return a
     return None
 
 
 def _geometry_notes(fit: Fit) -> list[str]:
     x0, x1, y0, y1 = fit.sole["left"]
-    notes = [f"{what}: {size * (1e3 if unit == 'm' else 180 / np.pi):.3g} "
-             f"{'mm' if unit == 'm' else 'deg'} (kept as zero)" for what, size, unit in fit.misfits]  # fmt: skip
+    worst: dict[str, tuple[float, str]] = {}
+    for what, size, unit in fit.misfits:
+        if size >= worst.get(unit, (-1.0, ""))[0]:
+            worst[unit] = (size, what)
+    notes = [
+        f"largest misfit kept as zero ({'offset' if unit == 'm' else 'angle'}): {what}, "
+        f"{size * (1e3 if unit == 'm' else 180 / np.pi):.3g} {'mm' if unit == 'm' else 'deg'}"
+        for unit, (size, what) in sorted(worst.items())
+    ]
     width = fit.geometry["foot_width"]
     notes.append(
         f"sole: the rectangle {(x1 - x0) * 1e3:.1f} x {(y1 - y0) * 1e3:.1f} mm around the sole "
@@ -134,7 +153,9 @@ def _geometry_notes(fit: Fit) -> list[str]:
     )
     kinds = {int(fit.model.geom_type[g]) for side in SIDES for g in fit.soles[side]}
     if kinds != {int(mujoco.mjtGeom.mjGEOM_BOX)}:
-        notes.append("sole: from the bounding boxes of non-box sole geoms (the spec's is a rectangle)")
+        notes.append(
+            "sole: from the bounding boxes of non-box sole geoms (the spec's is a rectangle)"
+        )
     if fit.held:
         notes.append(
             f"held joints ({len(fit.held)}: {', '.join(fit.held)}) are rigid in the spec; on the "
@@ -162,7 +183,7 @@ def _num(value) -> str:
 
 
 def import_robot(model_path, map_path=None) -> tuple[str, list[str]]:
-    """(spec TOML text, report lines) of the model at ``model_path`` (``slopewalk robot import``)."""
+    """(spec TOML text, report lines) of the model at ``model_path`` (``robot import``)."""
     from slopewalk.bench.robot_import.fit import fit_model
     from slopewalk.bench.robot_import.mapfile import load_map
 
@@ -171,7 +192,8 @@ def import_robot(model_path, map_path=None) -> tuple[str, list[str]]:
     data, notes = imported_spec(fit, robot_map)
     header = [
         f"Imported by `slopewalk robot import` from {fit.path}"
-        + (f" with the map {map_path}" if map_path else "") + ".",
+        + (f" with the map {map_path}" if map_path else "")
+        + ".",
         "Every approximation and its size: the report below (also printed by the import).",
         *(f"  {n}" for n in notes),
     ]
