@@ -408,7 +408,7 @@ def _sole_geoms(model, data, frame, foot: int) -> list[int]:
     return [g for g in geoms if bottoms[g] < lowest + OFFSET_TOLERANCE]
 
 
-def sole_extent(model, data, frame, geoms, ankle: np.ndarray) -> tuple[float, ...]:
+def sole_extent(model, data, frame, geoms, ankle: np.ndarray) -> tuple[float, float, float, float]:
     """(x min, x max, y min, y max) [m] of the sole geoms' lowest faces, from the ankle centre."""
     points = []
     for g in geoms:
@@ -416,7 +416,7 @@ def sole_extent(model, data, frame, geoms, ankle: np.ndarray) -> tuple[float, ..
         bottom = corners[:, 2].min()
         points.append(corners[corners[:, 2] < bottom + OFFSET_TOLERANCE])
     p = np.concatenate(points)[:, :2] - ankle[:2]
-    return (p[:, 0].min(), p[:, 0].max(), p[:, 1].min(), p[:, 1].max())
+    return (float(p[:, 0].min()), float(p[:, 0].max()), float(p[:, 1].min()), float(p[:, 1].max()))
 
 
 def _measured(fit: Fit, data, frame, misfits) -> Fit:
@@ -433,7 +433,7 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
     if not y_left > y_right:
         raise RobotImportError("left leg: not on the +y side of the right leg (x forward, z up?)")
     origin = np.array([hips[0][0], (y_left + y_right) / 2, hips[0][2]])
-    lengths = {}
+    lengths: dict[str, tuple[float, ...]] = {}
     for side in SIDES:
         leg = fit.legs[side]
         lengths[side] = (leg["hip_pitch"].anchor[2] - leg["knee"].anchor[2],

@@ -93,10 +93,10 @@ def lump_links(fit: Fit, side: str = "left") -> dict[str, Lumped]:
         model.body_subtreemass[h] * data.subtree_com[h] for h in hips
     )
     com_world = moment / mass
-    bodies = sorted(subtree(model, fit.base) - subtree(model, hips[0]) - subtree(model, hips[1]))
+    pelvis = sorted(subtree(model, fit.base) - subtree(model, hips[0]) - subtree(model, hips[1]))
     out["pelvis"] = Lumped(
         float(mass), frame.point(com_world) - fit.pelvis_origin,
-        _tensor(model, data, frame, bodies, com_world), tuple(bodies),
+        _tensor(model, data, frame, pelvis, com_world), tuple(pelvis),
     )  # fmt: skip
     return out
 
