@@ -91,6 +91,26 @@ def _mjcf_parser(sub) -> None:
     p.set_defaults(run=commands.mjcf)
 
 
+def _robot_parser(sub) -> None:
+    p = _command(
+        sub,
+        "robot",
+        "import an MJCF or URDF humanoid as a robot spec",
+        "Bring your own robot (docs/importing-robots.md). `robot import MODEL` compiles "
+        "the MJCF or URDF with MuJoCo, finds both legs' hip pitch, knee, ankle pitch and "
+        "ankle roll, checks that they fit the planner (or refuses in one line naming the "
+        "joint and the misfit) and writes a robot spec with a report of every approximation.",
+        "slopewalk robot import humanoid.xml --out humanoid.toml",
+        "slopewalk robot import robot.urdf --map robot-map.toml --out robot.toml",
+    )
+    actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    imp = actions.add_parser("import", help="write the robot spec of an MJCF or URDF model")
+    imp.add_argument("model", metavar="MODEL", help="the robot's MJCF (.xml) or URDF (.urdf)")
+    imp.add_argument("--map", metavar="MAP.toml", help="names what detection cannot decide")
+    imp.add_argument("--out", metavar="SPEC.toml", help="output spec (default: stdout)")
+    imp.set_defaults(run=commands.robot_import)
+
+
 def _trial_parser(sub) -> None:
     p = _command(
         sub,
@@ -438,6 +458,7 @@ COMMANDS = (  # one builder per subcommand, in the order `slopewalk --help` list
     _compare_parser,
     _sweep_parser,
     _controllers_parser,
+    _robot_parser,
     _fidelity_parser,
     _cop_error_parser,
     _envelope_parser,

@@ -109,6 +109,22 @@ def mjcf(args: argparse.Namespace) -> None:
     )
 
 
+def robot_import(args: argparse.Namespace) -> None:
+    from slopewalk.bench.robot_import.write import import_robot
+
+    if args.out:
+        check_output(args.out)
+    text, notes = import_robot(args.model, args.map)
+    if not args.out:
+        sys.stdout.write(text)
+        return
+    with atomic_paths(args.out) as (tmp,):
+        tmp.write_text(text)
+    print(f"wrote {args.out}: the robot spec of {args.model}; approximations:")
+    for note in notes:
+        print(f"  {note}")
+
+
 def trial(args: argparse.Namespace) -> None:
     from slopewalk.bench.sim.trial import run_trial, trial_checked
     from slopewalk.bench.sim.trial_spec import TrialSpec

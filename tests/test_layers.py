@@ -20,6 +20,7 @@ LAYERS = (  # (module prefix, layer): the longest matching prefix decides
     ("slopewalk.bench.flags", 1),
     ("slopewalk.bench.controllers", 1),
     ("slopewalk.bench.sim", 2),
+    ("slopewalk.bench.robot_import", 2),
     ("slopewalk.bench.tables", 3),
     ("slopewalk.bench.batch", 4),
     ("slopewalk.bench.experiments", 5),

@@ -1,0 +1,200 @@
+"""The robot spec and the approximation report of an imported model.
+
+``imported_spec`` turns a ``Fit`` into the spec's tables (``planner.spec``): geometry
+from the fit, links from ``lump``, joint limits from the model's ranges (the default
+robot's where it has none, said so), servo constants from the actuators of the planned
+joints (the map's ``[servo]``, else the default robot's, where the model has none).
+``spec_toml`` writes it with 17 significant digits, so it reads back as the same
+doubles. ``report_lines`` lists every approximation with its size.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from slopewalk.bench.robot_import.fit import Fit
+from slopewalk.bench.robot_import.lump import LEG_LINKS, lump_links, mirrored
+from slopewalk.bench.robot_import.mapfile import SIDES, RobotMap
+from slopewalk.planner.spec import JOINT_LIMIT_KEYS, LINK_NAMES, SERVO, load_spec, spec_from_dict
+
+
+def imported_spec(fit: Fit, robot_map: RobotMap | None = None) -> tuple[dict, list[str]]:
+    """(spec tables as ``spec_from_dict`` reads them, report lines)."""
+    robot_map = robot_map or RobotMap()
+    notes: list[str] = []
+    links = lump_links(fit, "left")
+    right = lump_links(fit, "right")
+    tables = {
+        name: {"mass": links[name].mass, "com": [float(v) for v in links[name].com],
+               "inertia": [float(v) for v in np.diag(links[name].inertia)]}
+        for name in LINK_NAMES
+    }  # fmt: skip
+    for name in LINK_NAMES:
+        notes.append(f"links.{name}: products of inertia dropped, largest "
+                     f"{links[name].dropped:.3g} of the largest moment")  # fmt: skip
+    for name, *_ in LEG_LINKS:
+        mirror = mirrored(right[name])
+        asym = max(abs(mirror.mass - links[name].mass) / links[name].mass,
+                   float(np.abs(mirror.com - links[name].com).max()))  # fmt: skip
+        notes.append(
+            f"links.{name}: the right leg's differs from the mirrored left's by "
+            f"{asym:.3g} (relative mass, or m of CoM); the spec mirrors the left"
+        )
+    data = {
+        "name": fit.name,
+        "geometry": {k: float(v) for k, v in fit.geometry.items()},
+        "links": tables,
+        "joint_limits": _limits(fit, notes),
+        "servo": _servo(fit, robot_map, notes),
+    }
+    notes += _geometry_notes(fit)
+    spec_from_dict(data, source=f"imported from {fit.path}")  # refuses a non-physical result
+    return data, notes
+
+
+def _limits(fit: Fit, notes: list[str]) -> dict[str, list[float]]:
+    model, default = fit.model, load_spec()
+    out = {}
+    for kind in JOINT_LIMIT_KEYS:
+        lows, highs = [], []
+        for side in SIDES:
+            joint = fit.legs[side][kind]
+            if model.jnt_limited[joint.joint]:
+                a, b = joint.sign * model.jnt_range[joint.joint]
+                lows.append(min(a, b))
+                highs.append(max(a, b))
+        if len(lows) == 2:
+            out[kind] = [float(max(lows)), float(min(highs))]
+        else:
+            out[kind] = list(default.joint_limits[kind])
+            notes.append(f"joint_limits.{kind}: the model has no range; the default robot's "
+                         f"{out[kind]} rad")  # fmt: skip
+    return out
+
+
+def _servo(fit: Fit, robot_map: RobotMap, notes: list[str]) -> dict[str, float]:
+    """Servo constants: the map's, else the planned joints' actuators', else the default's."""
+    model, default = fit.model, load_spec()
+    joints = [fit.legs[s][k].joint for s in SIDES for k in JOINT_LIMIT_KEYS]
+    dofs = [int(model.jnt_dofadr[j]) for j in joints]
+    measured: dict[str, list[float]] = {k: [] for k in SERVO}
+    for j in joints:
+        act = position_actuator(model, j)
+        if act is None:
+            continue
+        kp = float(model.actuator_gainprm[act, 0])
+        measured["stiffness"].append(kp)
+        measured["velocity_gain"].append(float(-model.actuator_biasprm[act, 2]))
+        if model.actuator_forcelimited[act]:
+            measured["stall_torque"].append(float(np.abs(model.actuator_forcerange[act]).min()))
+    measured["armature"] = [float(model.dof_armature[d]) for d in dofs]
+    measured["friction_loss"] = [float(model.dof_frictionloss[d]) for d in dofs]
+    damping = [float(model.dof_damping[d]) for d in dofs]
+    out = {}
+    for key in SERVO:
+        values = measured[key]
+        if key in robot_map.servo:
+            out[key] = robot_map.servo[key]
+            notes.append(f"servo.{key}: {out[key]:g} from the map file")
+        elif key == "no_load_speed" and min(damping) > 0 and "stall_torque" in out:
+            out[key] = out["stall_torque"] / float(np.mean(damping))
+            notes.append(
+                f"servo.no_load_speed: stall torque / joint damping "
+                f"{np.mean(damping):.4g} N m s/rad (spread {np.ptp(damping):.3g})"
+            )
+        elif len(values) == len(joints):
+            out[key] = float(np.mean(values))
+            notes.append(f"servo.{key}: mean of the 8 planned joints' {out[key]:.6g} "
+                         f"(spread {np.ptp(values):.3g})")  # fmt: skip
+        else:
+            out[key] = float(getattr(default, key))
+            notes.append(f"servo.{key}: the model does not say; the default robot's {out[key]:g}")
+    return out
+
+
+def position_actuator(model: mujoco.MjModel, joint: int) -> int | None:
+    """The position actuator (gain kp, bias −kp q − kv q̇, gear 1) driving ``joint``, or None."""
+    for a in range(model.nu):
+        if (
+            model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT
+            or model.actuator_trnid[a, 0] != joint
+        ):
+            continue
+        kp = model.actuator_gainprm[a, 0]
+        affine = model.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_AFFINE
+        if (
+            affine
+            and kp > 0
+            and model.actuator_biasprm[a, 1] == -kp
+            and model.actuator_gear[a, 0] == 1
+        ):
+            return a
+    return None
+
+
+def _geometry_notes(fit: Fit) -> list[str]:
+    x0, x1, y0, y1 = fit.sole["left"]
+    worst: dict[str, tuple[float, str]] = {}
+    for what, size, unit in fit.misfits:
+        if size >= worst.get(unit, (-1.0, ""))[0]:
+            worst[unit] = (size, what)
+    notes = [
+        f"largest misfit kept as zero ({'offset' if unit == 'm' else 'angle'}): {what}, "
+        f"{size * (1e3 if unit == 'm' else 180 / np.pi):.3g} {'mm' if unit == 'm' else 'deg'}"
+        for unit, (size, what) in sorted(worst.items())
+    ]
+    width = fit.geometry["foot_width"]
+    notes.append(
+        f"sole: the rectangle {(x1 - x0) * 1e3:.1f} x {(y1 - y0) * 1e3:.1f} mm around the sole "
+        f"geoms is centred {(y0 + y1) / 2 * 1e3:+.1f} mm off the ankle (y); the spec's is centred "
+        f"on it, {width * 1e3:.1f} mm wide (the part on both sides): "
+        f"{(1 - width / (y1 - y0)) * 100:.0f}% of the width left out"
+    )
+    kinds = {int(fit.model.geom_type[g]) for side in SIDES for g in fit.soles[side]}
+    if kinds != {int(mujoco.mjtGeom.mjGEOM_BOX)}:
+        notes.append(
+            "sole: from the bounding boxes of non-box sole geoms (the spec's is a rectangle)"
+        )
+    if fit.held:
+        notes.append(
+            f"held joints ({len(fit.held)}: {', '.join(fit.held)}) are rigid in the spec; on the "
+            "model they are held by their actuators and give under load (slopewalk robot compare)"
+        )
+    return notes
+
+
+def spec_toml(data: dict, header: list[str]) -> str:
+    """The spec tables as TOML, numbers with 17 significant digits, ``header`` as comments."""
+    lines = [f"# {h}" for h in header] + [f'name = "{data["name"]}"', "", "[geometry]"]
+    lines += [f"{k} = {_num(v)}" for k, v in data["geometry"].items()]
+    for name in LINK_NAMES:
+        lines += ["", f"[links.{name}]"]
+        lines += [f"{k} = {_num(v)}" for k, v in data["links"][name].items()]
+    for table in ("joint_limits", "servo"):
+        lines += ["", f"[{table}]"] + [f"{k} = {_num(v)}" for k, v in data[table].items()]
+    return "\n".join(lines) + "\n"
+
+
+def _num(value) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(_num(v) for v in value) + "]"
+    return repr(float(value))
+
+
+def import_robot(model_path, map_path=None) -> tuple[str, list[str]]:
+    """(spec TOML text, report lines) of the model at ``model_path`` (``robot import``)."""
+    from slopewalk.bench.robot_import.fit import fit_model
+    from slopewalk.bench.robot_import.mapfile import load_map
+
+    robot_map = load_map(map_path)
+    fit = fit_model(model_path, robot_map)
+    data, notes = imported_spec(fit, robot_map)
+    header = [
+        f"Imported by `slopewalk robot import` from {fit.path}"
+        + (f" with the map {map_path}" if map_path else "")
+        + ".",
+        "Every approximation and its size: the report below (also printed by the import).",
+        *(f"  {n}" for n in notes),
+    ]
+    return spec_toml(data, header), notes
