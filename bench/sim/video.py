@@ -161,9 +161,9 @@ def video_model(plan: Plan, result: TrialResult, size: tuple[int, int]) -> mujoc
     x /= np.linalg.norm(x)
     camera = np.column_stack([x, np.cross(z, x), z])  # its axes in the world
     pelvis = mjs.body(PELVIS)
-    body = np.empty(9)
-    mujoco.mju_quat2Mat(body, np.asarray(pelvis.quat, float))  # at qpos0
-    body = body.reshape(3, 3)
+    flat = np.empty(9)
+    mujoco.mju_quat2Mat(flat, np.asarray(pelvis.quat, float))  # at qpos0
+    body = flat.reshape(3, 3)
     quat = np.empty(4)
     mujoco.mju_mat2Quat(quat, (body.T @ camera).reshape(-1))
     pelvis.add_camera(
