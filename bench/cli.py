@@ -25,7 +25,9 @@ from slopewalk.bench.flags import (
     DOCS,
     GENERATIONS,
     POPULATION,
+    RECORD_RATE,
     SEED,
+    VIDEO_FPS,
     WORKERS,
     Formatter,
     Parser,
@@ -37,6 +39,7 @@ from slopewalk.bench.flags import (
     add_step_time_flag,
     integer,
     number,
+    video_size,
 )
 from slopewalk.bench.regenerate import add_regenerate_parser
 from slopewalk.planner import ranges
@@ -124,6 +127,7 @@ def _trial_parser(sub) -> None:
         "slopewalk trial --step-time 1 --slope 15 --out trial.json",
         "slopewalk trial --step-time 0.5 --friction 0.4 --actuators servo --out t.json \\\n"
         "      --series t.npz --record t.rrd",
+        "slopewalk trial --step-time 1 --slope 10 --out t.json --record t.rrd --video t.mp4",
         "slopewalk trial --step-time 0.6 --controller "
         "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
         "slopewalk trial --step-time 1 --slope 20 --command-noise 1e-4 --noise-seed 3 --out t.json",
@@ -151,8 +155,35 @@ def _trial_parser(sub) -> None:
     p.add_argument(
         "--record",
         metavar="FILE",
-        help="also write a rerun recording (.rrd): the robot on its slope, support polygon, "
-        "ZMP and CoP traces, contact forces, joint angles, events",
+        help="also write a rerun recording (.rrd; open it with `rerun FILE`): the robot on its "
+        "slope, support polygon, ZMP and CoP, contact forces, joint angles and torques, "
+        "margins, events, laid out by its own blueprint (docs/recordings.md)",
+    )
+    p.add_argument(
+        "--record-rate",
+        type=number(RECORD_RATE),
+        metavar="HZ",
+        help=f"sample rate of the recording's plots, in {RECORD_RATE} (only with --record; "
+        "default: every 1 ms sample, about 1 MB per simulated second; 100 Hz: a third of it)",
+    )
+    p.add_argument(
+        "--video",
+        metavar="FILE",
+        help="also render an .mp4 of the trial offscreen (a camera following the pelvis, ZMP "
+        "and CoP markers; needs PyAV, pip install 'slopewalk[video]', and an OpenGL backend: "
+        "MUJOCO_GL=egl by default; about 0.2 s a frame at 640x480); embedded in --record's file",
+    )
+    p.add_argument(
+        "--video-fps",
+        type=number(VIDEO_FPS),
+        metavar="FPS",
+        help=f"frames per second of --video, in {VIDEO_FPS} (default: 30)",
+    )
+    p.add_argument(
+        "--video-size",
+        type=video_size,
+        metavar="WxH",
+        help="frame size of --video in pixels, even sides in [16, 4096] (default: 640x480)",
     )
     p.add_argument(
         "--controller",

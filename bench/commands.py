@@ -126,11 +126,14 @@ def robot_import(args: argparse.Namespace) -> None:
 
 
 def trial(args: argparse.Namespace) -> None:
+    if args.video is not None:  # offscreen OpenGL, no display needed; read as MuJoCo is imported
+        os.environ.setdefault("MUJOCO_GL", "egl")
     from slopewalk.bench.sim.trial import run_trial, trial_checked
     from slopewalk.bench.sim.trial_spec import TrialSpec
     from slopewalk.planner.spec import load_spec
 
     outputs = {"--out": args.out, "--series": args.series, "--record": args.record}
+    outputs |= {"--video": args.video}
     outputs = {flag: path for flag, path in outputs.items() if path is not None}
     _distinct(outputs)
     for flag, path in outputs.items():
@@ -138,6 +141,9 @@ def trial(args: argparse.Namespace) -> None:
     if args.series is not None:
         _named_npz(args.series, "--series")
     _check_noise_flags(args)
+    _check_media_flags(args)
+    if args.video is not None:
+        render_video = _video_renderer(args)
     if args.record is not None:
         record_trial = _recorder("--record")
     if args.controller is not None:
@@ -161,10 +167,53 @@ def trial(args: argparse.Namespace) -> None:
         if "--series" in tmp:
             with open(tmp["--series"], "wb") as f:
                 np.savez_compressed(f, **result.series)
+        if "--video" in tmp:
+            render_video(tmp["--video"], plan, result)
         if "--record" in tmp:
-            record_trial(tmp["--record"], plan, result)
+            record_trial(
+                tmp["--record"], plan, result, plot_rate=args.record_rate, video=tmp.get("--video")
+            )
     print("\n".join(result.summary_lines()))
     print("wrote " + ", ".join(str(p) for p in outputs.values()))
+
+
+def _check_media_flags(args: argparse.Namespace) -> None:
+    """``--record-rate`` needs ``--record``; ``--video-fps``/``--video-size`` need ``--video``,
+    a file (an mp4 is written, then seeks back: no device) named ``.mp4``."""
+    from pathlib import Path
+
+    for flag, value, needs, given in (
+        ("--record-rate", args.record_rate, "--record", args.record),
+        ("--video-fps", args.video_fps, "--video", args.video),
+        ("--video-size", args.video_size, "--video", args.video),
+    ):
+        if value is not None and given is None:
+            shown = "x".join(map(str, value)) if isinstance(value, tuple) else f"{value:g}"
+            raise SlopewalkError(f"{flag} {shown}: only with {needs}, which is not given")
+    if args.video is None:
+        return
+    video = Path(args.video)
+    if video.exists() and not video.is_file():
+        raise SlopewalkError(f"--video {args.video!r}: must be a regular file (an mp4 seeks back)")
+    if video.suffix.lower() != ".mp4":
+        raise SlopewalkError(
+            f"--video {args.video!r}: is written as an MP4 video; give a name ending in .mp4"
+        )
+
+
+def _video_renderer(args: argparse.Namespace):
+    """``render_trial_video`` at the flags' rate and size, once PyAV and an OpenGL backend
+    are known to work here; else one line saying what to install or set."""
+    import functools
+
+    from slopewalk.bench.sim.video import VIDEO_FPS, VIDEO_SIZE, check_video, render_trial_video
+
+    size = args.video_size or VIDEO_SIZE
+    try:
+        check_video(size)
+    except SlopewalkError as err:
+        raise SlopewalkError(f"--video: {err}") from None
+    return functools.partial(render_trial_video, fps=args.video_fps or VIDEO_FPS, size=size)
 
 
 def _named_npz(path, flag: str) -> None:

@@ -53,6 +53,10 @@ SEED = Range(0, 2**32 - 1, integer=True, low_open=False)
 WORKERS = Range(1, 1024, integer=True, low_open=False)
 # slopewalk.bench.sim.trial's MAX_COMMAND_NOISE_DEG (a test keeps them equal)
 COMMAND_NOISE_DEG = Range(0.0, 0.5, "deg", low_open=False)
+# the plots of `trial --record`: at most every sample of the 1 ms simulation step
+RECORD_RATE = Range(0.0, 1000.0, "Hz")
+VIDEO_FPS = Range(1.0, 120.0, "fps", low_open=False)
+VIDEO_SIDE = Range(16, 4096, integer=True, low_open=False)  # [px], even (yuv420p's halves)
 
 
 def number(allowed: Range = FINITE):
@@ -83,6 +87,22 @@ def integer(allowed: Range):
         return value
 
     return parse
+
+
+def video_size(text: str) -> tuple[int, int]:
+    """An argparse type: ``WIDTHxHEIGHT`` in pixels, each even and inside ``VIDEO_SIDE``."""
+    try:
+        width, height = (int(side) for side in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not WIDTHxHEIGHT in pixels, e.g. 640x480"
+        ) from None
+    for side in (width, height):
+        if not VIDEO_SIDE.contains(side) or side % 2:
+            raise argparse.ArgumentTypeError(
+                f"{text}: each side must be an even number of pixels in {VIDEO_SIDE}"
+            )
+    return width, height
 
 
 def add_step_time_flag(

@@ -1,3 +1,4 @@
+import ctypes.util
 import os
 from pathlib import Path
 
@@ -5,6 +6,11 @@ import numpy as np
 import pytest
 
 from slopewalk.planner.spec import default_spec_path, load_spec
+
+# MuJoCo picks its OpenGL backend once, when first imported: offscreen through Mesa's EGL
+# for the video tests (tests/sim/test_video.py), as `slopewalk trial --video` does
+if ctypes.util.find_library("EGL"):
+    os.environ.setdefault("MUJOCO_GL", "egl")
 
 
 @pytest.fixture(scope="session")

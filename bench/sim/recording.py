@@ -3,26 +3,35 @@
 ``record_trial(path, plan, result)`` writes one file, headless (its own
 ``rr.RecordingStream`` saved to disk: no viewer, no network), atomically (a
 temporary file beside ``path`` is moved into place only once complete). Open it
-with ``rerun trial.rrd``.
+with ``rerun trial.rrd``: the file carries its own default layout (``blueprint``), a 3D
+view beside grouped plots, so the viewer opens on the same screen for every trial.
 
-Everything lies on the timeline ``time`` [s], walk start = 0. Entities:
+Everything lies on the timeline ``time`` [s], walk start = 0; the settling before it
+(the robot held at the plan's first pose, t < 0) is recorded for everything simulated.
+Entities:
 
 * ``world``: z up. ``world/plane``: the tilted plane around the walk (static).
 * ``world/robot/<body>``: each MJCF body's geoms (boxes, capsules, spheres) in
   the body frame, static, under a ``Transform3D`` of the body's world pose per
   frame, from ``mj_kinematics`` on the simulated ``qpos``.
 * ``world/support_polygon``: the planned support polygon, per frame.
-* ``world/zmp_analytic`` and ``world/cop_simulated``: the moving points, and
-  their whole path as a static ``.../trace``.
+* ``world/zmp_analytic``, ``world/zmp_lipm`` and ``world/cop_simulated``: the moving
+  points, and their whole path as a static ``.../trace``.
 * ``world/contact_force/left`` and ``.../right``: the ground force on each
   foot, drawn from the foot's CoP at ``FORCE_SCALE`` [m/N].
 * ``joints/<joint>/planned`` and ``.../actual`` [deg] for the 8 MJCF joints;
-  ``zmp/{x,y}/{analytic,simulated}`` [mm] in the slope frame S.
-* ``events``: one log line per event (WARN), one INFO line with both verdicts and the
-  controller (or "open loop").
+  ``torques/<joint>/planned`` (Newton-Euler) and ``.../simulated`` (MuJoCo's
+  ``actuator_force``) [N m]; ``zmp/{x,y}/{analytic,lipm,simulated}`` [mm] in the slope
+  frame S; ``margin/{analytic,simulated}`` [mm]: the signed distance of the planned ZMP
+  and of the simulated CoP to the planned support polygon, positive inside (and
+  ``margin/compliant`` where the trial predicted the compliant walk).
+* ``events``: an INFO line at the start of the settling, one INFO line at the walk's start
+  with both verdicts and the controller (or "open loop"), then one line per event (WARN).
+* ``video`` (when a video is given): the trial's mp4 (``video.py``), frame by frame.
 
-3D entities are sampled at ``frame_rate`` (100 Hz by default); the plots keep
-every sample of the series. Points on the plane are ``p_W = R_WS [x, y, 0]``.
+3D entities are sampled at ``frame_rate`` (100 Hz by default); the plots at
+``plot_rate``, by default every sample of the series (the simulation's 1 kHz). Points
+on the plane are ``p_W = R_WS [x, y, 0]``.
 """
 
 from __future__ import annotations
@@ -33,16 +42,19 @@ from typing import Any
 import mujoco
 import numpy as np
 import rerun as rr
+import rerun.blueprint as rrb
 
 from slopewalk.bench.files import atomic_path
-from slopewalk.bench.sim.playback import build_model
-from slopewalk.bench.sim.trial import TrialResult
+from slopewalk.bench.sim.playback import build_model, on_rows
+from slopewalk.bench.sim.trial import TrialResult, simulated_rows
 from slopewalk.planner.errors import SlopewalkError
-from slopewalk.planner.joints import MJCF_JOINTS
+from slopewalk.planner.joints import MJCF_JOINTS, stance_swing_to_left_right
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.plan import Plan
+from slopewalk.planner.zmp import signed_margin
 
 FRAME_RATE = 100.0  # [Hz] of the 3D entities
+SWEEP_PLOT_RATE = 100.0  # [Hz] of the plots in a sweep's or an envelope's recordings
 FORCE_SCALE = 0.01  # [m/N] arrow length per newton of ground force
 LIFT = 0.0005  # [m] drawing height of lines and points above the plane
 PLANE_MARGIN = 0.25  # [m] plane drawn this far beyond the soles
@@ -52,8 +64,18 @@ _COLORS = {
     "plane": (150, 160, 170, 120),
     "polygon": (40, 170, 80),
     "zmp": (40, 110, 230),
+    "lipm": (150, 60, 200),
     "cop": (240, 130, 20),
     "force": (220, 40, 40),
+}
+# The plots' series: (group, name) -> colour; the planned side blue, the simulated orange
+_LINES = {
+    "planned": _COLORS["zmp"],
+    "actual": _COLORS["cop"],
+    "simulated": _COLORS["cop"],
+    "analytic": _COLORS["zmp"],
+    "lipm": _COLORS["lipm"],
+    "compliant": (40, 170, 80),
 }
 
 
@@ -62,7 +84,13 @@ class RecordingError(SlopewalkError):
 
 
 def record_trial(
-    path: str | Path, plan: Plan, result: TrialResult, *, frame_rate: float = FRAME_RATE
+    path: str | Path,
+    plan: Plan,
+    result: TrialResult,
+    *,
+    frame_rate: float = FRAME_RATE,
+    plot_rate: float | None = None,
+    video: str | Path | None = None,
 ) -> Path:
     """Write the rerun recording of one trial to ``path`` (see module doc).
 
@@ -71,19 +99,20 @@ def record_trial(
         plan: The trial's plan (its robot, slope, support polygon).
         result: The trial's ``TrialResult``; its series must hold ``qpos`` (n, 15).
         frame_rate: Sampling of the 3D entities [Hz], > 0.
+        plot_rate: Sampling of the plots [Hz], > 0; None: every sample of the series.
+        video: An mp4 of the trial (``video.render_trial_video``) to embed, its first
+            frame at the first recorded time; None: no video.
 
     Returns:
         The path written.
     """
-    if not frame_rate > 0:
-        raise RecordingError(f"frame_rate {frame_rate!r} Hz: must be > 0")
+    for name, rate in (("frame_rate", frame_rate), ("plot_rate", plot_rate)):
+        if rate is not None and not (np.isfinite(rate) and rate > 0):
+            raise RecordingError(f"{name} {rate!r} Hz: must be a finite number > 0")
     series = result.series
     if "qpos" not in series:
         raise RecordingError("result.series has no 'qpos': cannot replay the robot in 3D")
-    t = np.asarray(series["t"], float)  # (n,)
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    frames = np.arange(0, t.size, max(1, round(1 / (frame_rate * dt))))
-    frames = np.unique(np.r_[frames, t.size - 1]) if t.size else frames  # keep the last
+    sim = simulated_rows(series)
     trial = result.trial
     model = build_model(
         plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
@@ -92,17 +121,63 @@ def record_trial(
     path = Path(path)
     rec = rr.RecordingStream(application_id="slopewalk")
     with atomic_path(path) as tmp:
-        rec.save(tmp)
+        rec.save(tmp, default_blueprint=blueprint(video=video is not None))
         try:
             rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
             _log_plane(rec, series, R)
-            _log_robot(rec, model, series["qpos"][frames], t[frames])
-            _log_balance(rec, plan, series, R, frames)
-            _log_plots(rec, series)
-            _log_events(rec, result)
+            frames = every(sim["t"], frame_rate)
+            _log_robot(rec, model, sim["qpos"][frames], sim["t"][frames])
+            _log_balance(rec, plan, series, sim, R, frame_rate)
+            _log_plots(rec, plan, series, sim, plot_rate)
+            _log_events(rec, result, float(sim["t"][0]) if sim["t"].size else 0.0)
+            if video is not None:
+                _log_video(rec, Path(video), float(sim["t"][0]) if sim["t"].size else 0.0)
         finally:
             rec.disconnect()  # flushes and closes the file (with its footer)
     return path
+
+
+def every(t: np.ndarray, rate: float | None) -> np.ndarray:
+    """Indices of the samples ``t`` [s] (evenly spaced) kept at ``rate`` [Hz]: every k-th,
+    k = round(1 / (rate dt)) ≥ 1, and the last; all of them for ``rate`` None."""
+    t = np.asarray(t, float)
+    if rate is None or t.size < 2:
+        return np.arange(t.size)
+    dt = float(np.median(np.diff(t)))
+    return np.unique(np.r_[np.arange(0, t.size, max(1, round(1 / (rate * dt)))), t.size - 1])
+
+
+def blueprint(*, video: bool = False) -> rrb.Blueprint:
+    """The recording's default layout: the 3D scene and the event log (and the video) on
+    the left; on the right, tabs of plots: balance (ZMP vs CoP per axis, the margins), each
+    joint's planned vs actual angle, each joint's planned vs simulated torque."""
+    left: list[Any] = [rrb.Spatial3DView(origin="world", name="robot on the slope")]
+    if video:
+        left.append(rrb.Spatial2DView(origin="video", name="video"))
+    left.append(rrb.TextLogView(origin="events", name="events"))
+    balance = rrb.Vertical(
+        rrb.TimeSeriesView(origin="zmp/x", name="ZMP x (up the slope) [mm]"),
+        rrb.TimeSeriesView(origin="zmp/y", name="ZMP y (left) [mm]"),
+        rrb.TimeSeriesView(origin="margin", name="margin to the support polygon [mm]"),
+        name="balance",
+    )
+    angles = rrb.Grid(
+        *[rrb.TimeSeriesView(origin=f"joints/{j}", name=f"{j} [deg]") for j in MJCF_JOINTS],
+        grid_columns=2,
+        name="joint angles",
+    )
+    torques = rrb.Grid(
+        *[rrb.TimeSeriesView(origin=f"torques/{j}", name=f"{j} [N m]") for j in MJCF_JOINTS],
+        grid_columns=2,
+        name="joint torques",
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(*left, row_shares=[3, 2, 1] if video else [3, 1]),
+            rrb.Tabs(balance, angles, torques, name="plots"),
+            column_shares=[3, 2],
+        )
+    )
 
 
 def _on_plane(xy: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -198,9 +273,11 @@ def _geoms(model, body: int) -> list:
     return out
 
 
-def _log_balance(rec, plan: Plan, series: dict, R: np.ndarray, frames: np.ndarray) -> None:
-    """Support polygon, analytic ZMP, simulated CoP (points and traces), foot forces."""
-    t = series["t"][frames]
+def _log_balance(rec, plan: Plan, series: dict, sim: dict, R: np.ndarray, rate: float) -> None:
+    """Support polygon, analytic and LIPM ZMP (the walk), simulated CoP and foot forces (the
+    settling and the walk): points and traces, sampled at ``rate`` [Hz]."""
+    walk = every(series["t"], rate)
+    t = np.asarray(series["t"], float)[walk]
     idx = np.clip(np.searchsorted(plan.t, t), 0, plan.t.size - 1)
     polygon = plan.polygon[idx]  # (k, 8, 2) in S
     strips = _on_plane(np.concatenate([polygon, polygon[:, :1]], axis=1), R)  # closed
@@ -209,22 +286,25 @@ def _log_balance(rec, plan: Plan, series: dict, R: np.ndarray, frames: np.ndarra
         indexes=_time(t),
         columns=rr.LineStrips3D.columns(strips=list(strips), colors=[_COLORS["polygon"]] * len(t)),
     )
-    for name, xy, color in (
-        ("zmp_analytic", series["zmp_analytic"], _COLORS["zmp"]),
-        ("cop_simulated", series["cop"], _COLORS["cop"]),
+    frames = every(sim["t"], rate)
+    for name, times, xy, color in (
+        ("zmp_analytic", series["t"], series["zmp_analytic"], _COLORS["zmp"]),
+        ("zmp_lipm", series["t"], series["zmp_lipm"], _COLORS["lipm"]),
+        ("cop_simulated", sim["t"], sim["cop"], _COLORS["cop"]),
     ):
         xy = np.asarray(xy, float)
-        ok = np.isfinite(xy[frames]).all(axis=1)  # the CoP is NaN while no foot is loaded
+        k = frames if name == "cop_simulated" else walk
+        ok = np.isfinite(xy[k]).all(axis=1)  # the CoP is NaN while no foot is loaded
         points = rr.Points3D.columns(
-            positions=_on_plane(xy[frames][ok], R),
+            positions=_on_plane(xy[k][ok], R),
             radii=[0.004] * ok.sum(),
             colors=[color] * ok.sum(),
         ).partition(ok.astype(int))
-        rec.send_columns(f"world/{name}", indexes=_time(t), columns=points)
+        rec.send_columns(f"world/{name}", indexes=_time(np.asarray(times)[k]), columns=points)
         trace = [_on_plane(s, R) for s in _finite_runs(xy)]
         rec.log(f"world/{name}/trace", rr.LineStrips3D(trace, colors=[color]), static=True)
-    cop = np.asarray(series["foot_cop"], float)[frames]  # (k, 2, 2)
-    force = np.asarray(series["foot_force"], float)[frames] @ R.T * FORCE_SCALE  # (k, 2, 3)
+    cop = np.asarray(sim["foot_cop"], float)[frames]  # (k, 2, 2)
+    force = np.asarray(sim["foot_force"], float)[frames] @ R.T * FORCE_SCALE  # (k, 2, 3)
     for f, foot in enumerate(_FEET):
         ok = np.isfinite(cop[:, f]).all(axis=1) & np.isfinite(force[:, f]).all(axis=1)
         vectors = force[ok, f]
@@ -232,7 +312,9 @@ def _log_balance(rec, plan: Plan, series: dict, R: np.ndarray, frames: np.ndarra
         cols = rr.Arrows3D.columns(
             vectors=vectors, origins=origins, colors=[_COLORS["force"]] * len(vectors)
         ).partition(ok.astype(int))
-        rec.send_columns(f"world/contact_force/{foot}", indexes=_time(t), columns=cols)
+        rec.send_columns(
+            f"world/contact_force/{foot}", indexes=_time(sim["t"][frames]), columns=cols
+        )
 
 
 def _finite_runs(xy: np.ndarray) -> list[np.ndarray]:
@@ -242,15 +324,39 @@ def _finite_runs(xy: np.ndarray) -> list[np.ndarray]:
     return [xy[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= 2]
 
 
-def _log_plots(rec: rr.RecordingStream, series: dict) -> None:
-    """Planned and actual joint angles [deg]; analytic and simulated ZMP in S [mm]."""
+def plotted(plan: Plan, series: dict, sim: dict) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every plot's series: entity -> (times [s], values), in the plots' units (degrees,
+    newton-metres, millimetres); planned values over the walk, simulated ones over the
+    settling and the walk. Values may be NaN (left out when logged)."""
     t = np.asarray(series["t"], float)
+    idx = np.clip(np.searchsorted(plan.t, t), 0, plan.t.size - 1)
+    tau = stance_swing_to_left_right(on_rows(t, plan, plan.tau), plan.stance[idx])
+    cop = np.asarray(series["cop"], float)
+    margin = signed_margin(cop, plan.polygon[idx])  # NaN where no foot is loaded
+    out = {}
     for j, joint in enumerate(MJCF_JOINTS):
-        for name, key in (("planned", "q_planned"), ("actual", "q_simulated")):
-            _send_scalars(rec, f"joints/{joint}/{name}", t, np.rad2deg(series[key][:, j]))
+        out[f"joints/{joint}/planned"] = t, np.rad2deg(series["q_planned"][:, j])
+        out[f"joints/{joint}/actual"] = sim["t"], np.rad2deg(sim["q_simulated"][:, j])
+        out[f"torques/{joint}/planned"] = t, tau[:, j]
+        out[f"torques/{joint}/simulated"] = sim["t"], sim["actuator_force"][:, j]
     for a, axis in enumerate("xy"):
-        for name, key in (("analytic", "zmp_analytic"), ("simulated", "cop")):
-            _send_scalars(rec, f"zmp/{axis}/{name}", t, 1e3 * np.asarray(series[key])[:, a])
+        out[f"zmp/{axis}/analytic"] = t, 1e3 * series["zmp_analytic"][:, a]
+        out[f"zmp/{axis}/lipm"] = t, 1e3 * series["zmp_lipm"][:, a]
+        out[f"zmp/{axis}/simulated"] = sim["t"], 1e3 * sim["cop"][:, a]
+    out["margin/analytic"] = t, 1e3 * series["margin_analytic"]
+    out["margin/simulated"] = t, 1e3 * margin
+    if "margin_compliant" in series:
+        out["margin/compliant"] = t, 1e3 * series["margin_compliant"]
+    return {k: (np.asarray(ts, float), np.asarray(v, float)) for k, (ts, v) in out.items()}
+
+
+def _log_plots(rec, plan: Plan, series: dict, sim: dict, rate: float | None) -> None:
+    """Each of ``plotted`` at ``rate`` [Hz] (None: every sample), its line named and coloured."""
+    for entity, (t, values) in plotted(plan, series, sim).items():
+        name = entity.rsplit("/", 1)[1]
+        rec.log(entity, rr.SeriesLines(colors=[_LINES[name]], names=[name]), static=True)
+        keep = every(t, rate)
+        _send_scalars(rec, entity, t[keep], values[keep])
 
 
 def _send_scalars(rec, entity: str, t: np.ndarray, values: np.ndarray) -> None:
@@ -258,8 +364,19 @@ def _send_scalars(rec, entity: str, t: np.ndarray, values: np.ndarray) -> None:
     rec.send_columns(entity, indexes=_time(t[ok]), columns=rr.Scalars.columns(scalars=values[ok]))
 
 
-def _log_events(rec: rr.RecordingStream, result: TrialResult) -> None:
-    """One INFO line with both verdicts at time 0, then each event (WARN) at its time."""
+def _log_events(rec: rr.RecordingStream, result: TrialResult, start: float) -> None:
+    """An INFO line at the settling's ``start`` [s], one with both verdicts at time 0, then
+    each event at its time (WARN for ``WARN_KINDS``)."""
+    if start < 0:
+        rec.set_time("time", duration=start)
+        rec.log(
+            "events",
+            rr.TextLog(
+                f"settling: the robot held at the plan's first pose for {-start:.3f} s "
+                "before the walk",
+                level=rr.TextLogLevel.INFO,
+            ),
+        )
     rec.set_time("time", duration=0.0)
     rec.log(
         "events",
@@ -274,3 +391,16 @@ def _log_events(rec: rr.RecordingStream, result: TrialResult) -> None:
         level = rr.TextLogLevel.WARN if event.kind in WARN_KINDS else rr.TextLogLevel.INFO
         rec.set_time("time", duration=float(event.time))
         rec.log("events", rr.TextLog(f"{event.kind}: {event.cause}", level=level))
+
+
+def _log_video(rec: rr.RecordingStream, path: Path, start: float) -> None:
+    """The mp4 at ``path`` as an asset, each frame shown from its time: ``start`` [s] plus
+    its presentation time in the video."""
+    asset = rr.AssetVideo(path=path)
+    rec.log("video", asset, static=True)
+    nanos = asset.read_frame_timestamps_nanos()
+    rec.send_columns(
+        "video",
+        indexes=_time(start + nanos / 1e9),
+        columns=rr.VideoFrameReference.columns_nanos(nanos),
+    )

@@ -6,7 +6,9 @@ loaded), ``foot_cop`` (n, 2, 2) and ``foot_force`` (n, 2, 3) per foot (left,
 right), ``q_planned`` / ``q_simulated`` (MJCF joint order), ``standing``,
 ``margin_analytic``, ``actuator_force``, ``sole`` (n, 2, 3), ``pelvis_height``,
 and ``qpos`` (n, 15): the simulated MuJoCo ``qpos`` (world frame) for replaying
-the motion, e.g. with ``mj_kinematics``.
+the motion, e.g. with ``mj_kinematics``. The settling before the walk (the robot held
+at the first pose, t < 0) has its own rows: ``settling_t`` and ``settling_<name>`` for
+``qpos``, ``q_simulated``, ``actuator_force``, ``cop``, ``foot_cop`` and ``foot_force``.
 
 ``run_trial(spec, trial)`` returns a ``TrialResult``: both ZMP series on the
 walk's time base, their RMS and max distance over the samples where the robot
@@ -333,8 +335,38 @@ def compare(
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
-        series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing),
+        series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing)
+        | _settling_series(s, t, t < plan.t[0]),
     )
+
+
+SIMULATED_ROWS = ("qpos", "q_simulated", "actuator_force", "cop", "foot_cop", "foot_force")
+
+
+def simulated_rows(series: dict) -> dict:
+    """The simulated series of ``TrialResult.series`` over the settling and the walk, in time
+    order: ``t`` and each of ``SIMULATED_ROWS`` (a series without ``settling_*`` entries, as
+    written before they existed, gives its walk rows alone)."""
+    settling = "settling_t" in series
+    return {
+        name: np.concatenate([series[f"settling_{name}"], series[name]])
+        if settling
+        else np.asarray(series[name])
+        for name in ("t", *SIMULATED_ROWS)
+    }
+
+
+def _settling_series(s, t: np.ndarray, settling: np.ndarray) -> dict:
+    """``TrialResult.series``' ``settling_*`` entries: the simulation before the walk."""
+    return {
+        "settling_t": t[settling],
+        "settling_qpos": np.column_stack([s.pelvis_qpos, s.q])[settling],
+        "settling_q_simulated": s.q[settling],
+        "settling_actuator_force": s.actuator_force[settling],
+        "settling_cop": s.cop[settling],
+        "settling_foot_cop": s.foot_cop[settling],
+        "settling_foot_force": s.foot_force[settling],
+    }
 
 
 def _series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing) -> dict:

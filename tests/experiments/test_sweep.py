@@ -137,6 +137,19 @@ def test_recording_per_trial(tmp_path):
     assert row["error"] == ""
     assert (tmp_path / f"{trial.trial_id}.rrd").stat().st_size > 0
     assert [p.name for p in tmp_path.iterdir()] == [f"{trial.trial_id}.rrd"]
+    import numpy as np
+    from rerun.chunk import RrdReader
+
+    from slopewalk.bench.sim.recording import SWEEP_PLOT_RATE
+
+    times = [  # a sweep's plots are decimated: every 10th sample of the 1 ms step
+        t
+        for chunk in RrdReader(tmp_path / f"{trial.trial_id}.rrd").store().stream()
+        if chunk.entity_path == "/joints/l_knee/actual" and not chunk.is_static
+        for t in chunk.to_record_batch().column("time").cast("int64").to_pylist()
+    ]
+    steps = np.diff(sorted(times))[:-1] / 1e9  # the last sample is kept, closer
+    np.testing.assert_allclose(steps, 1 / SWEEP_PLOT_RATE, atol=1e-9)
 
 
 # --- whole sweeps ------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 """Rerun recordings: every entity is in the file, the robot is MuJoCo's, nothing half-written."""
 
 import dataclasses
+import functools
 import time
 
 import mujoco
@@ -10,7 +11,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 import slopewalk.bench.sim.recording
-from slopewalk.bench.sim.playback import build_model, play
+from slopewalk.bench.sim.playback import SETTLE_TIME, build_model, play
 from slopewalk.bench.sim.recording import (
     FORCE_SCALE,
     FRAME_RATE,
@@ -18,7 +19,7 @@ from slopewalk.bench.sim.recording import (
     RecordingError,
     record_trial,
 )
-from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial import run_trial, simulated_rows
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import MJCF_JOINTS
@@ -34,6 +35,7 @@ def simulate(spec, step_time: float, slope: float = 0.0):
     return plan, run_trial(spec, trial, plan=plan, recording=rec)
 
 
+@functools.cache  # read once per file: the tests share the module's recording
 def chunks(path) -> dict[tuple[str, bool], dict[str, list]]:
     """{(entity, static): {column: values}} of an .rrd file; times in seconds."""
     out = {}
@@ -64,10 +66,13 @@ def test_the_file_holds_every_entity(walk):
     path, _, _, wall_s = walk
     print(f"\n{path.stat().st_size / 1e6:.2f} MB in {wall_s:.3f} s")
     assert 10_000 < path.stat().st_size < 5_000_000
-    # the robot at FRAME_RATE over the whole walk, the last sample kept
+    # the robot at FRAME_RATE over the settling and the walk, the last sample kept
     t = np.asarray(walk[2].series["t"])
+    rows = round((SETTLE_TIME + t[-1]) / walk[2].trial.timestep) + 1  # -0.5 s … the walk's end
     times = chunks(path)[("/world/robot/pelvis", False)]["time"]
-    assert len(times) == t.size // round(1 / (FRAME_RATE * np.median(np.diff(t)))) + 1
+    k = round(1 / (FRAME_RATE * np.median(np.diff(t))))  # every k-th row, and the last
+    assert len(times) == len(range(0, rows, k)) + ((rows - 1) % k != 0)
+    assert times[0] == pytest.approx(-SETTLE_TIME, abs=2e-9)
     assert times[-1] == pytest.approx(t[-1], abs=2e-9)
     assert [p.name for p in path.parent.iterdir()] == ["trial.rrd"]  # no temporary left
     found = {
@@ -87,6 +92,8 @@ def test_the_file_holds_every_entity(walk):
         ("/world/support_polygon", "LineStrips3D"),
         ("/world/zmp_analytic", "Points3D"),
         ("/world/zmp_analytic/trace", "LineStrips3D"),
+        ("/world/zmp_lipm", "Points3D"),
+        ("/world/zmp_lipm/trace", "LineStrips3D"),
         ("/world/cop_simulated", "Points3D"),
         ("/world/cop_simulated/trace", "LineStrips3D"),
         ("/world/contact_force/left", "Arrows3D"),
@@ -96,7 +103,13 @@ def test_the_file_holds_every_entity(walk):
     expected |= {
         (f"/joints/{j}/{k}", "Scalars") for j in MJCF_JOINTS for k in ("planned", "actual")
     }
-    expected |= {(f"/zmp/{a}/{k}", "Scalars") for a in "xy" for k in ("analytic", "simulated")}
+    expected |= {
+        (f"/torques/{j}/{k}", "Scalars") for j in MJCF_JOINTS for k in ("planned", "simulated")
+    }
+    expected |= {
+        (f"/zmp/{a}/{k}", "Scalars") for a in "xy" for k in ("analytic", "lipm", "simulated")
+    }
+    expected |= {(f"/margin/{k}", "Scalars") for k in ("analytic", "simulated", "compliant")}
     assert expected <= found, expected - found
 
 
@@ -109,19 +122,33 @@ def test_plots_polygon_and_forces_hold_the_trials_values(walk):
     path, plan, result, _ = walk
     data, series = chunks(path), result.series
     t = np.asarray(series["t"])
+    sim = simulated_rows(series)  # the settling (t < 0), then the walk
+    assert sim["t"][0] == pytest.approx(-SETTLE_TIME) and np.all(np.diff(sim["t"]) > 0)
     R = rotation_slope_to_world(plan.params.slope)
     for j, joint in enumerate(MJCF_JOINTS):  # degrees, every sample
-        for name, key in (("planned", "q_planned"), ("actual", "q_simulated")):
+        for name, times, values in (
+            ("planned", t, series["q_planned"]),
+            ("actual", sim["t"], sim["q_simulated"]),
+        ):
             column = data[(f"/joints/{joint}/{name}", False)]
-            np.testing.assert_allclose(column["time"], t, rtol=0, atol=2e-9)
-            np.testing.assert_allclose(_scalars(column), np.rad2deg(series[key][:, j]), rtol=1e-12)
+            np.testing.assert_allclose(column["time"], times, rtol=0, atol=2e-9)
+            np.testing.assert_allclose(_scalars(column), np.rad2deg(values[:, j]), rtol=1e-12)
+        column = data[(f"/torques/{joint}/simulated", False)]  # N m, MuJoCo's actuator force
+        np.testing.assert_allclose(column["time"], sim["t"], rtol=0, atol=2e-9)
+        np.testing.assert_allclose(_scalars(column), sim["actuator_force"][:, j], rtol=1e-12)
     for a, axis in enumerate("xy"):  # millimetres in S, NaN samples left out
-        for name, key in (("analytic", "zmp_analytic"), ("simulated", "cop")):
-            values = 1e3 * np.asarray(series[key])[:, a]
+        for name, times, xy in (
+            ("analytic", t, series["zmp_analytic"]),
+            ("lipm", t, series["zmp_lipm"]),
+            ("simulated", sim["t"], sim["cop"]),
+        ):
+            values = 1e3 * np.asarray(xy)[:, a]
             ok = np.isfinite(values)
             column = data[(f"/zmp/{axis}/{name}", False)]
-            np.testing.assert_allclose(column["time"], t[ok], rtol=0, atol=2e-9)
+            np.testing.assert_allclose(column["time"], times[ok], rtol=0, atol=2e-9)
             np.testing.assert_allclose(_scalars(column), values[ok], rtol=1e-12)
+    column = data[("/margin/analytic", False)]
+    np.testing.assert_allclose(_scalars(column), 1e3 * series["margin_analytic"], rtol=1e-12)
     polygon = data[("/world/support_polygon", False)]
     for time_s, (strip,) in zip(polygon["time"], polygon["LineStrips3D:strips"], strict=True):
         sample = t[np.argmin(abs(t - time_s))]  # the trial's time, then the plan's sample
@@ -136,8 +163,8 @@ def test_plots_polygon_and_forces_hold_the_trials_values(walk):
         )
         drawn = 0
         for time_s, vectors, origins in rows:
-            k = int(np.argmin(abs(t - time_s)))
-            cop, force = series["foot_cop"][k, f], series["foot_force"][k, f]
+            k = int(np.argmin(abs(sim["t"] - time_s)))  # the settling's rows too
+            cop, force = sim["foot_cop"][k, f], sim["foot_force"][k, f]
             if not vectors:
                 assert not np.isfinite(cop).all()
                 continue
@@ -147,18 +174,122 @@ def test_plots_polygon_and_forces_hold_the_trials_values(walk):
         assert drawn > 10
 
 
+def test_planned_torques_are_the_plans_newton_euler_torques_per_leg(walk):
+    """``torques/<joint>/planned``: the plan's torque of that joint's leg, stance or swing by
+    the plan's stance at that time (the walk's samples are the plan's)."""
+    path, plan, result, _ = walk
+    data = chunks(path)
+    t = np.asarray(result.series["t"])
+    np.testing.assert_allclose(t, plan.t[: t.size], rtol=0, atol=1e-9)
+    stance_left = plan.stance[: t.size] == 0  # Table-I order: 4 stance joints, then the swing leg's
+    for j, joint in enumerate(MJCF_JOINTS):
+        leg, side = divmod(j, 4)  # MJCF order: left hip…roll, right hip…roll
+        ankle_roll_first = {0: 3, 1: 2, 2: 1, 3: 0}  # left/right order vs Table I's stance
+        stance_col = ankle_roll_first[side]  # stance: ankle roll, ankle pitch, knee, hip
+        swing_col = 4 + side  # swing: hip, knee, ankle pitch, ankle roll
+        own_leg_is_stance = stance_left if leg == 0 else ~stance_left
+        tau = plan.tau[: t.size]
+        expected = np.where(own_leg_is_stance, tau[:, stance_col], tau[:, swing_col])
+        column = data[(f"/torques/{joint}/planned", False)]
+        np.testing.assert_allclose(column["time"], t, rtol=0, atol=2e-9)
+        np.testing.assert_allclose(_scalars(column), expected, rtol=1e-12, atol=1e-12)
+
+
+def test_the_simulated_margin_is_the_cops_distance_to_the_polygon_edge(walk):
+    """``margin/simulated`` [mm]: the CoP's distance to the nearest edge of the planned
+    support polygon, positive inside; checked point by point against edges and a winding."""
+    path, plan, result, _ = walk
+    column = chunks(path)[("/margin/simulated", False)]
+    t = np.asarray(result.series["t"])
+    for when, margin in list(zip(column["time"], _scalars(column), strict=True))[::97]:
+        k = int(np.argmin(abs(t - when)))  # the trial's sample, then the plan's (as trial.py)
+        p, polygon = (
+            result.series["cop"][k],
+            plan.polygon[min(np.searchsorted(plan.t, t[k]), k + 1)],
+        )
+        a, b = polygon, np.roll(polygon, -1, axis=0)
+        edge = b - a
+        along = np.clip(
+            np.einsum("ij,ij->i", p - a, edge) / np.maximum((edge**2).sum(1), 1e-30), 0, 1
+        )
+        distance = np.hypot(*(a + along[:, None] * edge - p).T).min()
+        inside = np.all(edge[:, 0] * (p - a)[:, 1] - edge[:, 1] * (p - a)[:, 0] >= -1e-12)
+        assert margin == pytest.approx(1e3 * distance * (1 if inside else -1), abs=1e-6)
+
+
+def _blueprint_views(path) -> dict[str, tuple[str, str]]:
+    """{view name: (kind, origin)} of the file's blueprint; asserts each shows its origin's
+    whole subtree."""
+    reader = RrdReader(path)
+    (entry,) = reader.blueprints()
+    assert entry.application_id == "slopewalk"  # the recording's: the viewer applies it
+    rows: dict[str, dict] = {}
+    for chunk in reader.store(store=entry).stream():
+        batch = chunk.to_record_batch()
+        fields = rows.setdefault(chunk.entity_path, {})
+        for name in batch.schema.names:
+            if name.split(":")[0] in ("ViewBlueprint", "ViewContents"):
+                fields[name] = batch.column(name).to_pylist()[-1][0]
+    views = {}
+    for entity, fields in rows.items():
+        if "ViewBlueprint:class_identifier" in fields:
+            assert rows[f"{entity}/ViewContents"]["ViewContents:query"] == "$origin/**"
+            views[fields["ViewBlueprint:display_name"]] = (
+                fields["ViewBlueprint:class_identifier"],
+                fields["ViewBlueprint:space_origin"],
+            )
+    return views
+
+
+def test_the_file_carries_its_layout_plots_grouped_by_what_they_compare(walk):
+    path = walk[0]
+    views = _blueprint_views(path)
+    kinds = sorted(kind for kind, _ in views.values())
+    assert kinds == ["3D", "TextLog"] + ["TimeSeries"] * 19, views
+    assert views["robot on the slope"] == ("3D", "world")
+    assert views["events"] == ("TextLog", "events")
+    entities = {entity for entity, _ in chunks(path)}
+    plotted = {"/" + origin: [] for kind, origin in views.values() if kind == "TimeSeries"}
+    for entity in entities:
+        parent = entity.rsplit("/", 1)[0]
+        if parent in plotted:
+            plotted[parent].append(entity.rsplit("/", 1)[1])
+    assert (
+        sorted(plotted["/zmp/x"]) == sorted(plotted["/zmp/y"]) == ["analytic", "lipm", "simulated"]
+    )
+    assert sorted(plotted["/margin"]) == ["analytic", "compliant", "simulated"]
+    for joint in MJCF_JOINTS:  # each joint: planned vs actual in one plot, torques in another
+        assert sorted(plotted[f"/joints/{joint}"]) == ["actual", "planned"]
+        assert sorted(plotted[f"/torques/{joint}"]) == ["planned", "simulated"]
+
+
+def test_a_lower_plot_rate_keeps_every_kth_sample_and_the_3d_rate(walk, tmp_path):
+    path, plan, result, _ = walk
+    low = record_trial(tmp_path / "low.rrd", plan, result, plot_rate=100.0)
+    full, lean = chunks(path), chunks(low)
+    sim_t = simulated_rows(result.series)["t"]
+    expected = np.unique(np.r_[sim_t[::10], sim_t[-1]])
+    np.testing.assert_allclose(lean[("/joints/l_knee/actual", False)]["time"], expected, atol=2e-9)
+    key = ("/world/robot/pelvis", False)
+    assert lean[key]["time"] == full[key]["time"]
+    print(
+        f"\nfull rate {path.stat().st_size / 1e6:.2f} MB, 100 Hz {low.stat().st_size / 1e6:.2f} MB"
+    )
+    assert low.stat().st_size < 0.6 * path.stat().st_size
+
+
 def test_the_robot_in_the_file_is_mujocos(walk):
     """Body pose ∘ geom offset read back from the file = MuJoCo's geom positions at that qpos."""
     path, plan, result, _ = walk
     data = chunks(path)
     model = build_model(plan, friction=1.0, actuators="stiff", timestep=0.001)
     mj = mujoco.MjData(model)
-    t = np.asarray(result.series["t"])
+    sim = simulated_rows(result.series)  # the settling, then the walk
     for body, kind, key in (("l_foot", "Boxes3D", "centers"), ("r_shank", "Capsules3D", None)):
         pose = data[(f"/world/robot/{body}", False)]
         geom = data[(f"/world/robot/{body}", True)]
         for k in (0, len(pose["time"]) // 2, len(pose["time"]) - 1):
-            mj.qpos[:] = result.series["qpos"][np.argmin(abs(t - pose["time"][k]))]
+            mj.qpos[:] = sim["qpos"][np.argmin(abs(sim["t"] - pose["time"][k]))]
             mujoco.mj_kinematics(model, mj)
             R = np.empty(9)
             mujoco.mju_quat2Mat(R, np.roll(pose["Transform3D:quaternion"][k][0], 1))
@@ -181,10 +312,15 @@ def test_zmp_and_cop_lie_on_the_tilted_plane(walk):
     data = chunks(path)
     R = rotation_slope_to_world(plan.params.slope)
     t = np.asarray(result.series["t"])
-    for entity, key in (("zmp_analytic", "zmp_analytic"), ("cop_simulated", "cop")):
+    sim = simulated_rows(result.series)
+    for entity, times, xys in (
+        ("zmp_analytic", t, result.series["zmp_analytic"]),
+        ("zmp_lipm", t, result.series["zmp_lipm"]),
+        ("cop_simulated", sim["t"], sim["cop"]),
+    ):
         points = data[(f"/world/{entity}", False)]
         for time_s, p in zip(points["time"], points["Points3D:positions"], strict=True):
-            xy = result.series[key][np.argmin(abs(t - time_s))]
+            xy = xys[np.argmin(abs(times - time_s))]
             if np.isfinite(xy).all():
                 np.testing.assert_allclose(p[0], R @ [*xy, LIFT], atol=1e-6)
             else:
@@ -203,11 +339,12 @@ def test_events_and_verdicts_are_log_lines(spec, tmp_path):
     levels = [level for (level,) in log["TextLog:level"]]  # one line per row
     texts = [text for (text,) in log["TextLog:text"]]
     lines = list(zip(log["time"], levels, texts, strict=True))
-    assert lines[0][:2] == (0.0, "INFO")
-    assert f"simulated {result.simulated_verdict}" in lines[0][2]
-    assert f"analytic {result.analytic_verdict}" in lines[0][2]
-    assert lines[0][2].endswith("; open loop")
-    for event, (when, level, text) in zip(result.events, lines[1:], strict=True):
+    assert lines[0][:2] == (-SETTLE_TIME, "INFO") and lines[0][2].startswith("settling")
+    assert lines[1][:2] == (0.0, "INFO")
+    assert f"simulated {result.simulated_verdict}" in lines[1][2]
+    assert f"analytic {result.analytic_verdict}" in lines[1][2]
+    assert lines[1][2].endswith("; open loop")
+    for event, (when, level, text) in zip(result.events, lines[2:], strict=True):
         assert when == pytest.approx(event.time, abs=1e-6)
         assert level == "WARN"
         assert text == f"{event.kind}: {event.cause}"
@@ -219,8 +356,8 @@ def test_a_closed_loop_recording_names_its_controller(spec, tmp_path):
     plan = plan_walk(spec, trial.gait)
     result = run_trial(spec, trial, plan=plan)
     log = chunks(record_trial(tmp_path / "closed.rrd", plan, result))[("/events", False)]
-    (first, *_) = [text for (text,) in log["TextLog:text"]]
-    assert first.endswith(f"; controller {name}")
+    (_, verdicts, *_) = [text for (text,) in log["TextLog:text"]]
+    assert verdicts.endswith(f"; controller {name}")
 
 
 def test_a_failure_mid_write_leaves_no_file(walk, tmp_path, monkeypatch):
@@ -243,6 +380,9 @@ def test_bad_input_is_refused_in_one_line(walk, tmp_path):
     _, plan, result, _ = walk
     with pytest.raises(RecordingError, match="frame_rate 0 Hz"):
         record_trial(tmp_path / "a.rrd", plan, result, frame_rate=0)
+    for rate in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(RecordingError, match=f"plot_rate {rate} Hz: must be a finite number"):
+            record_trial(tmp_path / "a.rrd", plan, result, plot_rate=rate)
     no_qpos = {k: v for k, v in result.series.items() if k != "qpos"}
     with pytest.raises(RecordingError, match="qpos"):
         record_trial(tmp_path / "a.rrd", plan, dataclasses.replace(result, series=no_qpos))

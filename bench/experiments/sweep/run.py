@@ -110,13 +110,14 @@ __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep", "op
 
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
-    """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place."""
-    from slopewalk.bench.sim.recording import record_trial
+    """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place; its plots
+    at ``SWEEP_PLOT_RATE`` (a tenth of a trial's, a third of the size per simulated second)."""
+    from slopewalk.bench.sim.recording import SWEEP_PLOT_RATE, record_trial
 
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"
     try:
-        written = record_trial(tmp, plan, result)
+        written = record_trial(tmp, plan, result, plot_rate=SWEEP_PLOT_RATE)
         os.replace(written or tmp, directory / f"{trial_id}.rrd")
     finally:
         with contextlib.suppress(FileNotFoundError):
