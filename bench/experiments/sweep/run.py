@@ -184,7 +184,8 @@ def run_sweep(
         config: The parsed sweep file.
         out_dir: Run directory: ``sweep.csv`` and, with ``record``, ``recordings/``.
         workers: Local worker processes (default all cores), when ``executor`` is None.
-        executor: A ``concurrent.futures`` executor to run on instead (e.g. ``open_cluster``).
+        executor: A ``concurrent.futures`` executor to run on instead, e.g. a Dask
+            cluster's (``batch.cluster.open_cluster``).
         resume: True: go on from the rows there; None: resume an unfinished run
             if there is one; False: a fresh run (refused over an unfinished one).
         record: Also write ``recordings/<trial_id>.rrd`` per trial.
