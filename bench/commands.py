@@ -395,6 +395,10 @@ def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkErr
     names the folder, False (a fresh run) for the default folder."""
     from pathlib import Path
 
+    if args.cluster is None:
+        for flag, value in (("--in-flight", args.in_flight), ("--join-timeout", args.join_timeout)):
+            if value is not None:
+                raise error(f"{flag} {value:g}: only with --cluster")
     if args.record:
         try:
             import slopewalk.bench.sim.recording  # noqa: F401
@@ -409,11 +413,21 @@ def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkErr
 def _batch_executor(args: argparse.Namespace):
     """The Dask cluster of ``--cluster`` (None: local workers) for a resumable run;
     SIGINT or SIGTERM of the run exits with 128 + the signal, its message on stderr."""
+    from slopewalk.bench.batch.cluster import open_cluster
     from slopewalk.bench.batch.run import Stopped
-    from slopewalk.bench.experiments.sweep.run import open_cluster
+    from slopewalk.bench.flags import JOIN_TIMEOUT_S
 
+    cluster = (
+        open_cluster(
+            args.cluster,
+            in_flight=args.in_flight,
+            join_timeout=JOIN_TIMEOUT_S if args.join_timeout is None else args.join_timeout,
+        )
+        if args.cluster
+        else contextlib.nullcontext()
+    )
     try:
-        with open_cluster(args.cluster) if args.cluster else contextlib.nullcontext() as executor:
+        with cluster as executor:
             yield executor
     except Stopped as stop:
         print(f"slopewalk: {stop.message}", file=sys.stderr)

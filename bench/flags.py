@@ -51,6 +51,10 @@ POPULATION = Range(2, 1000, integer=True, low_open=False)
 GENERATIONS = Range(1, 100_000, integer=True, low_open=False)
 SEED = Range(0, 2**32 - 1, integer=True, low_open=False)
 WORKERS = Range(1, 1024, integer=True, low_open=False)
+# --cluster: trials submitted at a time, and the longest wait for a worker (docs/cluster.md)
+IN_FLIGHT = Range(1, 100_000, integer=True, low_open=False)
+JOIN_TIMEOUT = Range(0.0, 86_400.0, "s")
+JOIN_TIMEOUT_S = 60.0  # [s] the default: a worker started by hand has joined long before
 # slopewalk.bench.sim.trial's MAX_COMMAND_NOISE_DEG (a test keeps them equal)
 COMMAND_NOISE_DEG = Range(0.0, 0.5, "deg", low_open=False)
 # the plots of `trial --record`: at most every sample of the 1 ms simulation step
@@ -229,13 +233,29 @@ def add_batch_flags(
         "--workers",
         type=integer(WORKERS),
         metavar="N",
-        help=f"local worker processes, in {WORKERS} (default: all cores); ignored with --cluster",
+        help=f"local worker processes, in {WORKERS} (default: all cores); with --cluster "
+        "unused: the cluster's workers run the jobs (see --in-flight)",
     )
     p.add_argument(
         "--cluster",
         metavar="ADDRESS",
-        help="run on a Dask distributed scheduler, e.g. tcp://host:8786 (workers need "
-        "slopewalk installed)",
+        help="run on the workers of a Dask scheduler, e.g. tcp://host:8786; every node needs "
+        "this slopewalk installed and, for --record, DIR on a shared file system "
+        "(docs/cluster.md)",
+    )
+    p.add_argument(
+        "--in-flight",
+        type=integer(IN_FLIGHT),
+        metavar="N",
+        help=f"with --cluster: jobs submitted at a time, in {IN_FLIGHT} (default: 2 per "
+        "worker thread connected, followed as workers come and go)",
+    )
+    p.add_argument(
+        "--join-timeout",
+        type=number(JOIN_TIMEOUT),
+        metavar="S",
+        help=f"with --cluster: the longest wait [s] for a worker, at the start or when all "
+        f"have left, in {JOIN_TIMEOUT} (default: {JOIN_TIMEOUT_S:g})",
     )
     p.add_argument("--resume", action="store_true", help=resume_help)
     p.add_argument("--record", action="store_true", help=record_help)

@@ -20,12 +20,15 @@ Two ways to run them:
   when its parent exits, and a thread in each worker that watches its parent
   pid is the fallback elsewhere. Workers ignore SIGINT: Ctrl-C reaches the
   whole process group, and the main process decides.
-- ``FuturesPool``: any ``concurrent.futures.Executor``, e.g. a Dask
-  ``distributed.Client``'s; at most ``window`` jobs are submitted at a time.
+- ``FuturesPool``: any ``concurrent.futures.Executor``, e.g. a Dask cluster's
+  (``cluster.py``); at most ``window`` jobs are submitted at a time.
   An executor cannot say which job a lost worker held, so a failed future
   comes back as a ``Lost`` with ``known=False``: the caller should not blame
   the job for it. (Dask's ``KilledWorker``, raised for a task that its
   workers died running several times over, is the exception: ``known=True``.)
+  An executor that says more (``cluster.Cluster``) sets the window itself
+  (its ``window()``) and tells which workers it lost and which jobs each held
+  (its ``lost_workers()``); the pool passes each on as a ``WorkerLost``.
 
 ``interruptible()`` turns SIGTERM (and SIGINT) into an ``Interrupted``
 exception in the main thread, so a terminated run stops like a Ctrl-C one:
@@ -87,6 +90,21 @@ class Lost:
 
     cause: str
     known: bool = True
+
+
+@dataclass(frozen=True)
+class WorkerLost:
+    """A worker an executor lost while jobs ran; the executor ran its jobs again elsewhere.
+
+    Attributes:
+        worker: The worker's address, e.g. "tcp://10.0.0.7:40123".
+        cause: One line, e.g. "died or stopped answering".
+        keys: The jobs it was running or held queued, resubmitted to the other workers.
+    """
+
+    worker: str
+    cause: str
+    keys: tuple[str, ...]
 
 
 def one_line(err: BaseException) -> str:
@@ -360,10 +378,21 @@ class LocalPool:
 
 
 class FuturesPool:
-    """Any ``concurrent.futures`` executor, fed at most ``window`` jobs at a time."""
+    """Any ``concurrent.futures`` executor, fed at most ``window`` jobs at a time.
 
-    def __init__(self, fn: Callable, executor: Executor, *, window: int = 64):
-        self.fn, self.executor, self.window = fn, executor, window
+    ``window``: an int, or None for the executor's own ``window()`` (a ``cluster.Cluster``:
+    from the threads of its workers, asked again as they come and go) or else 64. An
+    executor with a ``lost_workers()`` method (returning ``(worker, cause, futures)``
+    triples since the last call) has each loss passed on by ``run`` as a ``WorkerLost``.
+    """
+
+    def __init__(self, fn: Callable, executor: Executor, *, window: int | None = None):
+        self.fn, self.executor = fn, executor
+        own = getattr(executor, "window", None)
+        self.window: Callable[[], int] = (
+            (lambda: window) if window is not None else own if callable(own) else (lambda: 64)
+        )
+        self._lost = getattr(executor, "lost_workers", None)
         self._pending: dict = {}
 
     def __enter__(self) -> FuturesPool:
@@ -374,18 +403,21 @@ class FuturesPool:
             future.cancel()
         self._pending = {}
 
-    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str, object]]:
-        """As ``LocalPool.run``; a failed future is a ``Lost(cause, known=False)``."""
+    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str | None, object]]:
+        """As ``LocalPool.run``; a failed future is a ``Lost(cause, known=False)``, and a
+        lost worker a ``(None, WorkerLost)`` pair (its jobs' results come later, from elsewhere)."""
         jobs = iter(jobs)
         more = True
         while True:
-            while more and len(self._pending) < self.window:
+            window = max(1, self.window())
+            while more and len(self._pending) < window:
                 job = next(jobs, None)
                 if job is None:
                     more = False
                     break
                 key, args = job
                 self._pending[self.executor.submit(self.fn, *args)] = key
+            yield from self._worker_losses()
             if not self._pending:
                 return
             done, _ = wait_futures(list(self._pending), timeout=WAIT_S, return_when=FIRST_COMPLETED)
@@ -397,3 +429,9 @@ class FuturesPool:
                     # Dask's KilledWorker names the task whose workers kept dying: that one's fault
                     known = type(err).__name__ == "KilledWorker"
                     yield key, Lost(one_line(err), known=known)
+
+    def _worker_losses(self) -> Iterator[tuple[None, WorkerLost]]:
+        """The workers the executor says it lost since the last look, with our jobs they held."""
+        for worker, cause, futures in self._lost() if self._lost is not None else ():
+            keys = tuple(self._pending[f] for f in futures if f in self._pending)
+            yield None, WorkerLost(worker, cause, keys)

@@ -22,7 +22,12 @@ A job whose function raises is the job's ``error_row``; so is one whose worker
 died ("worker died: signal 9 (SIGKILL)"), and the run goes on. A job lost by a
 cluster executor, which cannot say which job a lost worker held, leaves no row
 and is reported, to be run by ``--resume``. SIGINT and SIGTERM stop the run with
-every finished row kept (``Stopped``).
+every finished row kept (``Stopped``). A worker a cluster lost while its jobs ran is
+said at once, one line each with the jobs it held (the cluster ran them again elsewhere),
+and listed in the result (``lost_workers``).
+
+The recordings directory travels to the workers absolute: a cluster's workers do not
+share the caller's working directory.
 """
 
 from __future__ import annotations
@@ -39,6 +44,7 @@ from slopewalk.bench.batch.executor import (
     Interrupted,
     LocalPool,
     Lost,
+    WorkerLost,
     interruptible,
 )
 from slopewalk.bench.batch.progress import Progress
@@ -92,7 +98,8 @@ class Batch:
 class BatchResult:
     """What a run did: ``table`` (the finished one, or the partial one if jobs were lost),
     jobs in all, found done, run now, error rows, lost jobs (one line each), verdict counts,
-    and the rows written now (in the order they finished)."""
+    the rows written now (in the order they finished), and the workers a cluster lost
+    while jobs ran (one line each, with the jobs it ran again elsewhere)."""
 
     table: Path
     total: int
@@ -102,6 +109,7 @@ class BatchResult:
     lost: tuple[str, ...]
     verdicts: dict
     rows: tuple[dict, ...]
+    lost_workers: tuple[str, ...] = ()
 
 
 def run_batch(
@@ -124,6 +132,7 @@ def run_batch(
 
     Args:
         record_dir: Where jobs write ``<key>.rrd``; a job without its recording is not done.
+            Made absolute here, before it travels to a worker.
         order: Sort key of the jobs still to run (longest first pays off), or None.
         intro: (done, workers) -> the line said before the first job.
         after_row: (row, jobs left) -> text appended to progress log lines (an ETA).
@@ -134,6 +143,7 @@ def run_batch(
         Stopped: SIGINT or SIGTERM; the rows written so far stay in the partial table.
     """
     out_dir = Path(out_dir)
+    record_dir = None if record_dir is None else Path(record_dir).absolute()
     final, partial = batch.paths(out_dir)
     workers = workers or os.cpu_count() or 1
     # a table that is not ours is refused here; one of the previous version may be replaced
@@ -144,10 +154,11 @@ def run_batch(
         bar = Progress(total, done, tty=progress, quiet=quiet, name=batch.name)
         if intro is not None:
             bar.say(intro(done, workers))
+        # a cluster sets its window from its workers' threads, never from this machine's cores
         pool = (
             LocalPool(batch.fn, workers=workers)
             if executor is None
-            else FuturesPool(batch.fn, executor, window=4 * workers)
+            else FuturesPool(batch.fn, executor)
         )
         try:
             played = _play(pool, todo, table, batch, bar, record_dir, total - done, after_row)
@@ -172,6 +183,7 @@ def run_batch(
         lost=tuple(played.lost),
         verdicts=counts,
         rows=tuple(played.rows),
+        lost_workers=tuple(played.lost_workers),
     )
 
 
@@ -217,12 +229,14 @@ def _still_to_run(
 
 @dataclass
 class _Played:
-    """What ``_play`` did: rows appended, error rows among them, lost jobs, the rows."""
+    """What ``_play`` did: rows appended, error rows among them, lost jobs, the rows,
+    the workers lost (one line each)."""
 
     ran: int = 0
     errors: int = 0
     lost: list[str] = field(default_factory=list)
     rows: list[dict] = field(default_factory=list)
+    lost_workers: list[str] = field(default_factory=list)
 
 
 def _play(pool, todo, table, batch, bar, record_dir, left_before, after_row) -> _Played:
@@ -237,6 +251,10 @@ def _play(pool, todo, table, batch, bar, record_dir, left_before, after_row) -> 
 
     with pool:
         for key, outcome in pool.run(pairs()):
+            if isinstance(outcome, WorkerLost):
+                played.lost_workers.append(_worker_lost(outcome, batch, inflight))
+                bar.say(f"{batch.name}: {played.lost_workers[-1]}")
+                continue
             job = inflight.pop(key)
             if isinstance(outcome, Lost) and not outcome.known:
                 played.lost.append(f"{batch.label(job)}: {outcome.cause}")
@@ -260,6 +278,19 @@ def _play(pool, todo, table, batch, bar, record_dir, left_before, after_row) -> 
             extra = after_row(row, left) if after_row is not None and left > 0 else ""
             bar.update(f"{batch.label(job)}: {verdict}", extra)
     return played
+
+
+def _worker_lost(loss: WorkerLost, batch: Batch, inflight: dict) -> str:
+    """One line: the worker, why, and the jobs it held, which its executor ran again."""
+    labels = [batch.label(inflight[k]) for k in loss.keys if k in inflight]
+    held = (
+        f"resubmitted to the other workers, the {len(labels)} {batch.unit} it held: "
+        + "; ".join(labels[:3])
+        + (f"; and {len(labels) - 3} more" if len(labels) > 3 else "")
+        if labels
+        else f"it held none of the {batch.unit}"
+    )
+    return f"worker {loss.worker} lost ({loss.cause}); {held}"
 
 
 def _stopped(err: Interrupted, table: AppendTable, batch: Batch, total: int, partial: Path):

@@ -32,6 +32,10 @@ and CoP, CoM, pelvis orientation, stance and phase).
 ``recording()`` turns what was simulated so far into a ``playback.Recording``, the
 same object ``playback.play`` returns, so events, the ZMP comparison, reports and
 recordings follow unchanged (``trial.run_trial`` with a ``controller``).
+
+``physics``: the same ``MjData`` as a ``dm_control.mujoco.Physics`` (named indexing,
+rendering), where dm_control is installed and works with the MuJoCo installed
+(``dm_physics.py``; slopewalk does not depend on it); else one line that says why.
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ import numpy as np
 from dm_env import specs
 
 from slopewalk.bench.sim.contact import NON_FOOT_BODIES
+from slopewalk.bench.sim.dm_physics import shared_physics
 from slopewalk.bench.sim.events import FALL_HEIGHT_FRACTION
 from slopewalk.bench.sim.floor import SoftFloor
 from slopewalk.bench.sim.model import servo_settings
@@ -131,6 +136,7 @@ class TrialEnv(dm_env.Environment):
             (self.model.nu,), np.float64, lo.copy(), hi.copy(), name="ctrl"
         )
         self._observation_spec = self._observe.spec()
+        self._physics = None  # made on first use of ``physics``
 
     # ---- dm_env.Environment ----
 
@@ -167,6 +173,18 @@ class TrialEnv(dm_env.Environment):
         return self._observation_spec
 
     # ---- the bench's side ----
+
+    @property
+    def physics(self):
+        """This environment's ``MjData`` itself as a ``dm_control.mujoco.Physics``.
+
+        Raises:
+            dm_physics.PhysicsUnavailable: dm_control is not installed, or does not
+                work with the MuJoCo installed (one line saying which).
+        """
+        if self._physics is None:
+            self._physics = shared_physics(self.data)
+        return self._physics
 
     @property
     def ended(self) -> str | None:

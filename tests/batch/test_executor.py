@@ -18,6 +18,7 @@ from slopewalk.bench.batch.executor import (
     Interrupted,
     LocalPool,
     Lost,
+    WorkerLost,
     death_cause,
     interruptible,
 )
@@ -98,6 +99,38 @@ def test_a_failed_future_is_lost_without_blame():
     with ThreadPoolExecutor(1) as executor, FuturesPool(job, executor, window=2) as pool:
         results = dict(pool.run([("a", ("ok", 1)), ("b", ("raise", 2))]))
     assert results == {"a": 2, "b": Lost("ValueError: bad value 2", known=False)}
+
+
+class _SmallCluster(ThreadPoolExecutor):
+    """An executor that sets its own window and loses a worker holding its first future."""
+
+    def __init__(self):
+        super().__init__(4)
+        self.futures, self.most = [], 0
+        self.reported = False
+
+    def window(self) -> int:
+        return 2
+
+    def submit(self, fn, *args):
+        self.futures.append(super().submit(fn, *args))
+        self.most = max(self.most, sum(not f.done() for f in self.futures))
+        return self.futures[-1]
+
+    def lost_workers(self):
+        if self.reported or not self.futures:
+            return []
+        self.reported = True
+        return [("tcp://node:1", "died", (self.futures[0],))]
+
+
+def test_an_executor_sets_its_window_and_reports_its_lost_workers():
+    jobs = [(k, ("sleep", 0.05)) for k in "abcdef"]
+    with _SmallCluster() as executor, FuturesPool(job, executor) as pool:
+        results = list(pool.run(jobs))
+    assert executor.most <= 2 < len(jobs)  # the executor's window, not 64
+    assert sorted(k for k, _ in results if k is not None) == list("abcdef")
+    assert [r for k, r in results if k is None] == [WorkerLost("tcp://node:1", "died", ("a",))]
 
 
 def test_sigterm_interrupts_like_sigint():

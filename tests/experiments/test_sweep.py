@@ -431,6 +431,10 @@ def test_rows_of_another_sweep_are_refused(tmp_path, capsys, reference):
         (b"\x00\xff\xfe binary", [], "not UTF-8 text (byte 0xff at offset 1)"),
         ("[[trial]]\n", ["--workers", "0"], "--workers: 0: must be an integer in [1, 1024]"),
         ("[[trial]]\n", ["--cluster", "localhost"], "not a scheduler address like tcp://"),
+        ("[[trial]]\n", ["--in-flight", "0"], "--in-flight: 0: must be an integer in [1, 100000]"),
+        ("[[trial]]\n", ["--in-flight", "8"], "--in-flight 8: only with --cluster"),
+        ("[[trial]]\n", ["--join-timeout", "0"], "--join-timeout: 0: must lie in (0, 86400] s"),
+        ("[[trial]]\n", ["--join-timeout", "5"], "--join-timeout 5: only with --cluster"),
     ],
 )
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, config, flags, message):

@@ -92,6 +92,7 @@ class EnvelopeSummary:
     ga_evaluations: int
     ga_s: float
     sim_s: float = 0.0
+    lost_workers: tuple[str, ...] = ()  # one line per worker a cluster lost, with its cells
 
     @property
     def cells_per_min(self) -> float:
@@ -110,7 +111,8 @@ class EnvelopeSummary:
             f"feasible (a gait with the ZMP inside exists): {self.feasible} of {self.total} cells",
             f"wrote {self.table}",
         ]
-        return out + [f"lost: {line}" for line in self.lost[:5]]
+        lost = [f"lost: {line}" for line in self.lost[:5]]
+        return out + lost + list(self.lost_workers)
 
 
 def _threads(workers: int, executor) -> int:
@@ -171,6 +173,7 @@ def run_envelope(
         ga_evaluations=sum(r.get("ga_evaluations") or 0 for r in result.rows),
         ga_s=sum(r.get("ga_s") or 0.0 for r in result.rows),
         sim_s=sum(r.get("sim_s") or 0.0 for r in result.rows),
+        lost_workers=result.lost_workers,
     )
 
 

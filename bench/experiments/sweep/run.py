@@ -5,7 +5,7 @@ The sweep-specific half; the generic half (the resumable table run shared with
 job each at a time, worker deaths, signals) and ``progress.py``. Trials run as calls of
 the top-level ``run_one`` on local spawned workers (``LocalPool``) or on any
 ``concurrent.futures`` executor, e.g. a Dask ``distributed.Client``'s
-(``--cluster ADDRESS``, ``FuturesPool``).
+(``--cluster ADDRESS``: ``batch/cluster.py``, fed by ``FuturesPool``).
 
 A run directory holds ``sweep.partial.csv`` while a run is going and
 ``sweep.csv`` when it is done (``tables/sweep.py``):
@@ -29,9 +29,10 @@ goes on. A trial lost by a cluster executor, which cannot say which trial a
 lost worker held, leaves no row and is reported, to be run by ``--resume``.
 SIGINT and SIGTERM stop the run with every finished row kept (``Stopped``).
 
-On a cluster, the workers need slopewalk installed (they import ``bench``), and
-``--record`` writes ``.rrd`` files from the workers, so ``DIR`` must be on a
-file system they share.
+On a cluster, the workers need this slopewalk installed (``batch/cluster.py`` refuses
+a worker whose code differs), and ``--record`` writes ``.rrd`` files from the
+workers, into ``DIR`` made absolute, so ``DIR`` must be on a file system they share
+at the same path (docs/cluster.md).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from pathlib import Path
 
 from slopewalk.bench.batch.executor import one_line
 from slopewalk.bench.batch.run import Batch, Stopped, duration, run_batch
-from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepError, SweepTrial
+from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepTrial
 from slopewalk.bench.tables.sweep import (
     SWEEP,
     SWEEP_CONTROLLER,
@@ -106,7 +107,7 @@ SWEEP_BATCH = Batch(
     source="the sweep file",
     unit="trials",
 )
-__all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep", "open_cluster"]
+__all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep"]
 
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
@@ -124,40 +125,6 @@ def _record(directory: Path, trial_id: str, plan, result) -> None:
             os.remove(tmp)
 
 
-@contextlib.contextmanager
-def open_cluster(cluster: str):
-    """The ``concurrent.futures`` executor of a Dask cluster's ``Client``.
-
-    Args:
-        cluster: Dask scheduler address, e.g. ``tcp://host:8786``.
-
-    Raises:
-        SweepError: the cluster cannot be reached, or Dask is not installed.
-    """
-    try:
-        from distributed import Client
-    except ImportError:
-        raise SweepError("--cluster needs Dask: pip install 'dask[distributed]'") from None
-    from distributed.comm.addressing import parse_address, parse_host_port
-
-    try:  # a malformed address, refused before a Client exists (its __del__ would hang)
-        scheme, location = parse_address(cluster, strict=True)
-        if scheme in ("tcp", "tls"):
-            parse_host_port(location)
-    except ValueError as err:
-        raise SweepError(
-            f"cluster {cluster!r}: not a scheduler address like tcp://host:8786 ({err})"
-        ) from None
-    try:
-        client = Client(cluster, timeout=10, set_as_default=False)
-    except Exception as err:
-        raise SweepError(f"cluster {cluster!r}: cannot connect ({one_line(err)})") from None
-    try:
-        yield client.get_executor(pure=False)
-    finally:
-        client.close()
-
-
 @dataclass(frozen=True)
 class SweepSummary:
     """What a sweep run did.
@@ -172,6 +139,8 @@ class SweepSummary:
         sim_steps: Simulation steps of the trials run now.
         wall_s: Wall time of this run [s].
         verdicts: (analytic, simulated) -> count over the whole table.
+        lost_workers: One line per worker a cluster lost while trials ran, with the trials
+            it held (run again on the other workers).
     """
 
     table: Path
@@ -183,6 +152,7 @@ class SweepSummary:
     sim_steps: int
     wall_s: float
     verdicts: dict
+    lost_workers: tuple[str, ...] = ()
 
     def lines(self) -> list[str]:
         verdicts = ", ".join(f"{a}/{s} {n}" for (a, s), n in sorted(self.verdicts.items()))
@@ -193,7 +163,8 @@ class SweepSummary:
             "analytic / simulated verdicts: " + (verdicts or "none (no row written)"),
             f"wrote {self.table}",
         ]
-        return out + [f"lost: {line}" for line in self.lost[:5]]
+        lost = [f"lost: {line}" for line in self.lost[:5]]
+        return out + lost + list(self.lost_workers)
 
 
 # long: to be split once the actuator-mode work in this module has landed (issue 20)
@@ -214,7 +185,8 @@ def run_sweep(
         config: The parsed sweep file.
         out_dir: Run directory: ``sweep.csv`` and, with ``record``, ``recordings/``.
         workers: Local worker processes (default all cores), when ``executor`` is None.
-        executor: A ``concurrent.futures`` executor to run on instead (e.g. ``open_cluster``).
+        executor: A ``concurrent.futures`` executor to run on instead, e.g. a Dask
+            cluster's (``batch.cluster.open_cluster``).
         resume: True: go on from the rows there; None: resume an unfinished run
             if there is one; False: a fresh run (refused over an unfinished one).
         record: Also write ``recordings/<trial_id>.rrd`` per trial.
@@ -284,4 +256,5 @@ def run_sweep(
         sim_steps=sum(r.get("sim_steps") or 0 for r in result.rows),
         wall_s=time.perf_counter() - start,
         verdicts=result.verdicts,
+        lost_workers=result.lost_workers,
     )
