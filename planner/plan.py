@@ -455,6 +455,4 @@ def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarra
 
 
 def _spec_dict(spec: RobotSpec) -> dict:
-    d = asdict(spec)
-    d["links"] = {k: asdict(v) for k, v in spec.links.items()}
-    return d
+    return spec.as_dict()

@@ -149,8 +149,8 @@ def solve_reference(
     double = flat(~timeline.in_ssp)
     heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
     polygon = support_polygon(
-        foot_corners(stance_sole, heel, toe, half),
-        foot_corners(swing_sole, heel, toe, half),
+        foot_corners(stance_sole, heel, toe, half, spec.sole_shift(stance)),
+        foot_corners(swing_sole, heel, toe, half, spec.sole_shift(1 - stance)),
         double,
     )
     margin = signed_margin(zmp, polygon)

@@ -32,6 +32,8 @@ GEOMETRY_KEYS = (
     "foot_length",
     "foot_width",
 )
+# optional [geometry] keys and their defaults (a spec without them is the paper's layout)
+OPTIONAL_GEOMETRY = {"sole_offset": 0.0}
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,8 @@ class RobotSpec:
         ankle_height: Ankle centre above the sole [m].
         ankle_to_toe: Ankle centre to toe edge along x [m].
         foot_length, foot_width: Sole rectangle [m].
+        sole_offset: Lateral offset of the sole rectangle's centre from the ankle centre,
+            outward (+y for the left foot, −y for the right) [m]; 0 centres it under the ankle.
         links: Inertials by link name (pelvis, thigh, shank, ankle, foot); legs as the left leg.
         joint_limits: (lower, upper) [rad] by joint kind, MJCF sign convention.
         stall_torque: Servo torque limit [N m].
@@ -109,6 +113,7 @@ class RobotSpec:
     velocity_gain: float
     armature: float
     friction_loss: float
+    sole_offset: float = 0.0
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -120,6 +125,10 @@ class RobotSpec:
                 f"geometry.ankle_to_toe {self.ankle_to_toe!r} m: must lie in "
                 f"(0, foot_length = {self.foot_length!r}) m (the ankle stands over the foot)"
             )
+        half = self.foot_width / 2
+        Range(-half, half, "m", high_open=True).check(
+            "geometry.sole_offset", self.sole_offset, SpecError
+        )
         for kind, pair in self.joint_limits.items():
             lower, upper = pair
             for bound in pair:
@@ -135,6 +144,28 @@ class RobotSpec:
     def heel_offset(self) -> float:
         """Ankle centre to heel edge along x [m] (positive number)."""
         return self.foot_length - self.ankle_to_toe
+
+    def as_dict(self) -> dict[str, Any]:
+        """The spec's fields as plain data; an optional geometry key at its default is left
+        out, so a spec without it is written (and identified) as before the key existed."""
+        from dataclasses import asdict
+
+        d = asdict(self)
+        for key, default in OPTIONAL_GEOMETRY.items():
+            if d[key] == default:
+                del d[key]
+        return d
+
+    def sole_shift(self, side: int | np.ndarray) -> np.ndarray:
+        """y of the sole rectangle's centre from the sole point under the ankle [m].
+
+        Args:
+            side: Leg, 0 left / 1 right (``joints.LEFT``/``RIGHT``), scalar or array.
+
+        Returns:
+            ``sole_offset`` outward: +offset for the left foot, −offset for the right.
+        """
+        return self.sole_offset * (1.0 - 2.0 * np.asarray(side, dtype=float))
 
     @property
     def leg_reach(self) -> float:
@@ -248,7 +279,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     links_table = _table(data, "links")
     limits = _table(data, "joint_limits")
     servo = _table(data, "servo")
-    _known(geometry, GEOMETRY_KEYS, "geometry.")
+    _known(geometry, GEOMETRY_KEYS + tuple(OPTIONAL_GEOMETRY), "geometry.")
     _known(links_table, LINK_NAMES, "links.")
     _known(limits, JOINT_LIMIT_KEYS, "joint_limits.")
     _known(servo, tuple(SERVO), "servo.")
@@ -266,6 +297,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     return RobotSpec(
         name=data.get("name", Path(source).stem),
         **{key: _number(geometry, key, "geometry") for key in GEOMETRY_KEYS},
+        **{key: _float(geometry.get(key, default)) for key, default in OPTIONAL_GEOMETRY.items()},
         links=links,
         joint_limits=joint_limits,
         **{key: _number(servo, key, "servo") for key in SERVO},

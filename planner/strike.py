@@ -58,7 +58,8 @@ def strike_roll(plan, stiffness: float) -> np.ndarray:
         return theta
     half = plan.spec.foot_width / 2
     towards_swing = np.sign(plan.swing_sole[rows, 1] - plan.stance_sole[rows, 1])
-    edge_y = plan.stance_sole[rows, 1] - towards_swing * half
+    centre = plan.stance_sole[rows, 1] + plan.spec.sole_shift(plan.stance[rows])
+    edge_y = centre - towards_swing * half
     lever = np.abs(plan.swing_sole[rows, 1] - edge_y)
     arm = np.clip(towards_swing * (plan.com[rows, 1] - edge_y), 0.0, None)
     weight = plan.spec.total_mass * GRAVITY

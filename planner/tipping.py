@@ -193,8 +193,8 @@ def give_stiffness(plan, axis: int, corner_stiffness: float) -> tuple[np.ndarray
     """
     spec = plan.spec
     shape = (spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2)
-    stance = foot_corners(plan.stance_sole, *shape)[..., axis]  # (n, 4)
-    other = foot_corners(plan.swing_sole, *shape)[..., axis]
+    stance = foot_corners(plan.stance_sole, *shape, spec.sole_shift(plan.stance))[..., axis]
+    other = foot_corners(plan.swing_sole, *shape, spec.sole_shift(1 - plan.stance))[..., axis]
     both = plan.double_support[:, None]
     count = np.where(both, 8, 4)[:, 0]
     centroid = (stance.sum(axis=1) + np.where(both, other, 0.0).sum(axis=1)) / count
@@ -209,7 +209,8 @@ def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
     spec = plan.spec
     if axis == ROLL:
         half = spec.foot_width / 2
-        return sole - half, sole + half
+        centre = sole + spec.sole_shift(1 - plan.stance)
+        return centre - half, centre + half
     return sole - spec.heel_offset, sole + spec.ankle_to_toe
 
 

@@ -91,13 +91,15 @@ def friction_ratio(force) -> np.ndarray:
     return np.where(fn > 0, ft / np.where(fn > 0, fn, 1.0), np.inf)
 
 
-def foot_corners(center, heel: float, toe: float, half_width: float) -> np.ndarray:
+def foot_corners(center, heel: float, toe: float, half_width: float, shift=0.0) -> np.ndarray:
     """Sole rectangle of feet parallel to x_S, counter-clockwise from front-right.
 
     Args:
         center: Sole point under the ankle in S [m], shape (n, 2) (or (n, 3)).
         heel, toe: Ankle-to-heel and ankle-to-toe distances along x [m].
         half_width: Half the foot width [m].
+        shift: y of the rectangle's centre from the sole point [m], scalar or (n,)
+            (``RobotSpec.sole_shift`` of each row's foot); 0: centred under the ankle.
 
     Returns:
         Corners (x, y), shape (n, 4, 2).
@@ -105,7 +107,9 @@ def foot_corners(center, heel: float, toe: float, half_width: float) -> np.ndarr
     offsets = np.array(
         [[toe, -half_width], [toe, half_width], [-heel, half_width], [-heel, -half_width]]
     )
-    return np.asarray(center)[:, None, :2] + offsets
+    center = np.array(center, dtype=float)[:, :2]
+    center[:, 1] += shift
+    return center[:, None, :] + offsets
 
 
 def support_polygon(stance_corners, other_corners, double_support) -> np.ndarray:

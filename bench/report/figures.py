@@ -141,6 +141,7 @@ def zmp_traces(cases: list[tuple[str, object, object]], path: Path) -> Path:
                 [spec.ankle_to_toe, -spec.foot_width / 2],
             ]
         )
+        rect[:, 1] += spec.sole_shift(plan.stance[step][0])  # a sole beside its ankle
         ax.plot(*(rect * 1e3).T, "k-", lw=1.5, label="stance foot")
         ax.plot(*((plan.zmp[step] - origin) * 1e3).T, color="tab:orange", label="ZMP (eq. 4)")
         ax.plot(*((plan.com[step][:, :2] - origin) * 1e3).T, color="tab:green", label="CoM")

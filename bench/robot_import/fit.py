@@ -449,6 +449,9 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
                         OFFSET_TOLERANCE, "mm", 1e3)  # fmt: skip
     thigh, shank, ankle_height = lengths["left"]
     x0, x1, y0, y1 = sole["left"]
+    mirrored = np.subtract(sole["right"], (x0, x1, -y1, -y0))  # the right sole mirrors y
+    _refuse_or_keep(misfits, "sole extent left vs right (mirrored)",
+                    float(np.abs(mirrored).max()), OFFSET_TOLERANCE, "mm", 1e3)  # fmt: skip
     if not (x0 < 0 < x1 and y0 < 0 < y1):
         raise RobotImportError(
             f"left foot {model.body(fit.feet['left']).name!r}: the ankle centre is not above "
@@ -458,6 +461,6 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
     geometry = {
         "thigh": thigh, "shank": shank, "hip_width": y_left - y_right,
         "ankle_height": ankle_height, "ankle_to_toe": x1, "foot_length": x1 - x0,
-        "foot_width": 2 * min(-y0, y1),
+        "foot_width": y1 - y0, "sole_offset": (y0 + y1) / 2,
     }  # fmt: skip
     return replace(fit, pelvis_origin=origin, geometry=geometry, sole=sole, misfits=misfits)

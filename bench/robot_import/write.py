@@ -144,12 +144,9 @@ def _geometry_notes(fit: Fit) -> list[str]:
         f"{size * (1e3 if unit == 'm' else 180 / np.pi):.3g} {'mm' if unit == 'm' else 'deg'}"
         for unit, (size, what) in sorted(worst.items())
     ]
-    width = fit.geometry["foot_width"]
     notes.append(
         f"sole: the rectangle {(x1 - x0) * 1e3:.1f} x {(y1 - y0) * 1e3:.1f} mm around the sole "
-        f"geoms is centred {(y0 + y1) / 2 * 1e3:+.1f} mm off the ankle (y); the spec's is centred "
-        f"on it, {width * 1e3:.1f} mm wide (the part on both sides): "
-        f"{(1 - width / (y1 - y0)) * 100:.0f}% of the width left out"
+        f"geoms, centred {(y0 + y1) / 2 * 1e3:+.1f} mm outward of the ankle (geometry.sole_offset)"
     )
     kinds = {int(fit.model.geom_type[g]) for side in SIDES for g in fit.soles[side]}
     if kinds != {int(mujoco.mjtGeom.mjGEOM_BOX)}:

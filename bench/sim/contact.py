@@ -46,6 +46,9 @@ _SENSOR = mujoco.mjtSensor
 _OBJ = mujoco.mjtObj
 
 
+JOINT_SIGN = "slopewalk_joint_sign"  # numeric of an imported model: each MJCF joint's sign
+
+
 def add_trial_sensors(mjs: mujoco.MjSpec, floor: str = "floor") -> None:
     """Add every sensor a trial records to a scene spec (see module doc)."""
     for geom in FOOT_GEOMS:
@@ -165,9 +168,16 @@ def decode(model: mujoco.MjModel, sensordata: np.ndarray, rotation_slope_to_worl
     foot_cop[load <= 0] = np.nan
     cop[load.sum(-1) <= 0] = np.nan
     foot_force = -np.stack([block(f"{g}_net") for g in FOOT_GEOMS], axis=1) @ R
+    q = np.column_stack([block(f"{j}_pos") for j in MJCF_JOINTS])
+    torque = np.column_stack([block(f"{j}_torque") for j in MJCF_JOINTS])
+    try:  # an imported model's joints have signs of their own (robot_import.scene)
+        sign = model.numeric(JOINT_SIGN).data
+        q, torque = q * sign, torque * sign
+    except KeyError:
+        pass  # the twin: the planner's signs
     return TrialSensors(
-        q=np.column_stack([block(f"{j}_pos") for j in MJCF_JOINTS]),
-        actuator_force=np.column_stack([block(f"{j}_torque") for j in MJCF_JOINTS]),
+        q=q,
+        actuator_force=torque,
         foot_force=foot_force,
         foot_cop=foot_cop,
         cop=cop,

@@ -227,7 +227,8 @@ def foot_deflection(plan, floor: SoftFloor) -> tuple[np.ndarray, np.ndarray]:
     spec = plan.spec
     sole, load = foot_loads(plan)
     ahead = (spec.ankle_to_toe - spec.heel_offset) / 2  # the centroid ahead of the sole point
-    centroid = sole + np.array([ahead, 0.0])
+    beside = spec.sole_shift(np.array([LEFT, 1 - LEFT]))  # each centroid outward of its point
+    centroid = sole + np.stack([np.full(2, ahead), beside], axis=1)
     total = load.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.einsum("nf,nfi->ni", load, centroid) / total[:, None]
@@ -239,7 +240,8 @@ def foot_deflection(plan, floor: SoftFloor) -> tuple[np.ndarray, np.ndarray]:
             floor, load[:, foot], offset, length=spec.foot_length, width=spec.foot_width
         ).T
         turn[:, foot] = np.column_stack([theta_x, theta_y])
-        sink[:, foot] = r0 - theta_y * ahead  # the sole point sits `ahead` behind the centroid
+        # the sole point sits `ahead` behind the centroid and `beside` inward of it
+        sink[:, foot] = r0 - theta_y * ahead + theta_x * beside[foot]
     return turn, sink
 
 

@@ -384,7 +384,7 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
             )  # fmt: skip
         foot_body.add_geom(
             mjs.find_default("foot"), name=f"{pre}foot", size=half_sole,
-            pos=[(toe - heel) / 2, 0, sole + _SOLE_THICKNESS / 2],
+            pos=[(toe - heel) / 2, spec.sole_shift(side), sole + _SOLE_THICKNESS / 2],
         )  # fmt: skip
         for name, x in (("sole", 0.0), ("toe", toe), ("heel", -heel)):
             foot_body.add_site(name=f"{pre}{name}", pos=[x, 0, sole])

@@ -220,6 +220,7 @@ def play(
     hold: float = HOLD_TIME,
     command_noise: float = 0.0,
     noise_seed: int = 0,
+    scene=None,
 ) -> Recording:
     """Simulate ``plan`` and record it (see module doc).
 
@@ -231,6 +232,9 @@ def play(
         settle, hold: Hold times before and after the walk [s].
         command_noise: σ of white noise added to every command row [rad] (``noisy``).
         noise_seed: Seed of that noise.
+        scene: Where to play it: None the twin of ``plan.spec``; else an imported model's
+            scene (``robot_import.scene.ModelScene``: ``build``, ``controls``,
+            ``initial_state``).
     """
     return play_many(
         [plan],
@@ -241,6 +245,7 @@ def play(
         hold=hold,
         threads=1,
         noise=[(command_noise, noise_seed)],
+        scene=scene,
     )[0]
 
 
@@ -267,12 +272,13 @@ def play_many(
     hold=HOLD_TIME,
     threads: int = 1,
     noise=None,
+    scene=None,
 ) -> list[Recording]:
     """Simulate several plans, trials sharing ``threads`` MuJoCo threads.
 
     Trials with the same scene (robot, slope, friction, actuators) and length
     share one ``rollout`` call; each scene is compiled once. ``noise``: per plan
-    (σ [rad], seed) of ``noisy`` on its commands; None: none.
+    (σ [rad], seed) of ``noisy`` on its commands; None: none. ``scene``: ``play``'s.
     """
     groups: dict[tuple, list[int]] = {}
     for i, plan in enumerate(plans):
@@ -282,9 +288,10 @@ def play_many(
     out: dict[int, Recording] = {}
     for (_, _, mu, mode, _), members in groups.items():
         first = plans[members[0]]
-        model = build_model(first, friction=mu, actuators=mode, timestep=timestep)
+        build = build_model if scene is None else scene.build
+        model = build(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
-        floor = SoftFloor.of_scene(model)
+        floor = SoftFloor.of_scene(model) if scene is None else None
         controls, aims = [], []
         for i in members:  # the members share a length, so one time base: the last one's
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)
@@ -300,6 +307,7 @@ def play_many(
             servo.force_limit,
             aims=aims,
             threads=threads,
+            scene=scene,
         )
         out.update(zip(members, played, strict=True))
     return [out[i] for i in range(len(plans))]
@@ -314,6 +322,7 @@ def play_commands(
     *,
     aims=None,
     threads: int = 1,
+    scene=None,
 ) -> list[Recording]:
     """Play each plan of one scene from its first pose (``initial_state``) with its command.
 
@@ -327,11 +336,14 @@ def play_commands(
         force_limit: The actuators' torque limit [N m] (``Recording.force_limit``).
         aims: Per plan ``Recording.aim_offset`` (m, 8) or None; None: None for every plan.
         threads: MuJoCo threads the rollouts share.
+        scene: ``play``'s; its ``controls`` turn each command into the model's controls.
     """
     aims = [None] * len(plans) if aims is None else aims
-    states = np.array([initial_state(model, plan) for plan in plans])
+    start = initial_state if scene is None else scene.initial_state
+    states = np.array([start(model, plan) for plan in plans])
     datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(plans))))]
-    state, sensordata = rollout.rollout(model, datas, states, np.array(controls))
+    ctrl = np.array(controls if scene is None else [scene.controls(model, c) for c in controls])
+    state, sensordata = rollout.rollout(model, datas, states, ctrl)
     R_ws = rotation_slope_to_world(plans[0].params.slope)
     return [
         recording_from_rollout(

@@ -215,6 +215,7 @@ def run_trial(
     plan: Plan | None = None,
     recording: Recording | None = None,
     predict: bool = True,
+    scene=None,
 ) -> TrialResult:
     """Plan (unless given), simulate (unless given) and compare one trial.
 
@@ -223,6 +224,7 @@ def run_trial(
     whole trial; either way the same ``Recording`` goes through the same comparison.
     ``predict`` False leaves out the analytic predictions beyond the paper's verdict
     (``compare``), which cost most of a trial's time (the servo loop's walk).
+    ``scene``: ``playback.play``'s (an imported model's, open loop only).
     """
     start = time.perf_counter()
     plan = plan or plan_walk(spec, trial.gait)
@@ -235,6 +237,7 @@ def run_trial(
         timestep=trial.timestep,
         command_noise=trial.command_noise,
         noise_seed=trial.noise_seed,
+        scene=scene,
     )
     return compare(plan, trial, recording, wall_s=time.perf_counter() - start, predict=predict)
 

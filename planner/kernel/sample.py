@@ -597,6 +597,7 @@ def _margin(geometry, double, n, w):
     """
     n = min(n, B)  # a bound on the trip count (module doc)
     heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
+    offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
     # the corners (toe, −half), (toe, half), (−heel, half), (−heel, −half), each twice
     # (incoming edge, outgoing edge); edge k's outward normal is +x, +y, −x, −y
     corner_x = (toe, toe, toe, toe, -heel, -heel, -heel, -heel)
@@ -606,16 +607,17 @@ def _margin(geometry, double, n, w):
     for v in range(8):
         nx, ny = normal_x[v], normal_y[v]
         for j in range(n):
-            xs, ys = w[_XS + j], w[_YS + j]
+            shift = offset * (1.0 - 2.0 * w[_SIDE + j])  # the stance sole's; the swing's: −
+            xs, ys = w[_XS + j], w[_YS + j] + shift
             dx = (w[_SW + j] - xs) if double else 0.0
-            dy = (w[_SW + B + j] - ys) if double else 0.0
+            dy = (w[_SW + B + j] - shift - ys) if double else 0.0
             facing = dx * nx + dy * ny > 0
             w[_VERT + 2 * v * B + j] = xs + corner_x[v] + (dx if facing else 0.0)
             w[_VERT + (2 * v + 1) * B + j] = ys + corner_y[v] + (dy if facing else 0.0)
     if not double:  # the stance sole alone: an axis-aligned rectangle, in closed form
         for j in range(n):
             px, py = w[_ZX + j], w[_ZY + j]
-            xs, ys = w[_XS + j], w[_YS + j]
+            xs, ys = w[_XS + j], w[_YS + j] + offset * (1.0 - 2.0 * w[_SIDE + j])
             rx0, rx1 = px - (xs - heel), (xs + toe) - px
             ry0, ry1 = py - (ys - half), (ys + half) - py
             inside = min(min(rx0, rx1), min(ry0, ry1))

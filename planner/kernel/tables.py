@@ -43,7 +43,7 @@ PIECE_INTS = 5
 HZ, LIFT_X, TILT_X, PELVIS, STEP_LENGTH, SWAY_SHARE = range(6)
 COLUMNS = 6
 # geometry vector
-SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH = range(7)
+SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH, SOLE_OFFSET = range(8)
 # A block (``Blocks``): at most BLOCK samples, in rows of BLOCK floats per input: the
 # sample's time [s], then its piece's floats (T0, T1, STANCE_X, TOWARDS, the shapes:
 # the same columns as ``GaitTable.floats``, T1 replaced by the time), its stance side
@@ -189,7 +189,8 @@ class ChainTable:
     """The robot's constants in the kernel's layout.
 
     Attributes:
-        geometry: shank, thigh, hip width, ankle height, heel, toe [m], half foot width [m].
+        geometry: shank, thigh, hip width, ankle height, heel, toe [m], half foot width [m],
+            sole offset [m] (the sole's centre outward of the ankle, ``RobotSpec.sole_offset``).
         a: DH a_{i-1} [m], (8,). d5: DH d of the swing hip row per stance side [m], (2,).
         mass: Link masses of DH frames 0..8 [kg], (9,).
         com: Link CoMs in their DH frame [m], (2, 9, 3).
@@ -224,6 +225,7 @@ class ChainTable:
                 spec.heel_offset,
                 spec.ankle_to_toe,
                 spec.foot_width / 2,
+                spec.sole_offset,
             ]
         )
         return cls(

@@ -108,6 +108,17 @@ def test_kernel_equals_the_numpy_reference_on_extended_gaits(spec, slope_deg):
     _kernel_equals_reference(spec, params, Timeline.of(params), X)
 
 
+@pytest.mark.parametrize("sole_offset", [0.012, -0.009])  # [m] outward of the ankle
+def test_kernel_equals_the_numpy_reference_with_a_sole_beside_the_ankle(spec, sole_offset):
+    """A sole centred off its ankle (an imported robot's): the polygon and the margin of
+    every series, to 1e-9 of their scale, in both support phases and both stance sides."""
+    spec = replace(spec, sole_offset=sole_offset)
+    params = ga_params(spec, 1.0, np.deg2rad(8.0))
+    X = _population(spec, params, 8, seed=300, family="extended")
+    X[:, 2] *= np.where(np.arange(len(X)) % 2, 1.0, -1.0)
+    _kernel_equals_reference(spec, params, Timeline.of(params), X)
+
+
 @pytest.mark.parametrize("profile, share", [("hold", 0.0), ("sway", 1.0)])
 def test_six_columns_of_the_paper_family_are_its_three(spec, profile, share):
     """(Hz, Szmax, tilt) on a walk of ``profile`` is (…, 0, L, w of the profile): the kernel's

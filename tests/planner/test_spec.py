@@ -37,6 +37,11 @@ def test_default_spec_is_the_papers_biped(spec):
         (lambda d: d["servo"].update(armature=float("nan")), "servo.armature nan kg m^2"),
         (lambda d: d["servo"].update(friction_loss=True), "servo.friction_loss True"),
         (lambda d: d["servo"].update(stifness=9.0), "did you mean servo.stiffness?"),
+        (
+            lambda d: d["geometry"].update(sole_offset=0.03),
+            "geometry.sole_offset 0.03 m: must lie in (-0.03, 0.03) m",
+        ),
+        (lambda d: d["geometry"].update(sole_offset="1"), "geometry.sole_offset '1'"),
     ],
 )
 def test_malformed_spec_is_refused(edit, message):

@@ -20,6 +20,7 @@ from slopewalk.bench.robot_import.write import imported_spec
 from slopewalk.planner.kinematics import CHAIN_LINKS, Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import inverse_dynamics
 from slopewalk.planner.spec import spec_from_dict
+from slopewalk.planner.zmp import foot_corners
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 MODELS = {
@@ -129,3 +130,43 @@ def test_newton_euler_equals_mj_inverse_with_held_joints_welded(imported):
         np.testing.assert_allclose(
             dyn.stance_force[0], force, rtol=0, atol=1e-6 * np.abs(force).max()
         )
+
+
+def _box_bottom_in_s(ref, foot: int, stance: int) -> np.ndarray:
+    """(x min, x max, y min, y max) in S of the lowest face of the foot's box geoms."""
+    model, data = ref.model, ref.data
+    b = ref.body(foot)
+    R_S, o_S = ref.slope_frame(stance)
+    corners = []
+    for g in np.flatnonzero(
+        (model.geom_bodyid == b) & (model.geom_type == mujoco.mjtGeom.mjGEOM_BOX)
+    ):
+        signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+        local = signs * model.geom_size[g]
+        world = data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
+        corners.append((world - o_S) @ R_S)
+    corners = np.concatenate(corners)
+    bottom = corners[corners[:, 2] < corners[:, 2].min() + 1e-9]
+    return np.array([*np.sort([bottom[:, 0].min(), bottom[:, 0].max()]),
+                     bottom[:, 1].min(), bottom[:, 1].max()])  # fmt: skip
+
+
+def test_sole_rectangle_equals_the_models_sole_boxes(imported):
+    """The planner's stance sole rectangle (``foot_corners`` with the spec's lateral sole
+    offset) = the bottom face of the model's two sole boxes, in S, both feet, 10 poses: the
+    whole width, centred outward of the ankle as the model has it (none of it cut)."""
+    fit, spec = imported
+    ref = ModelReference(fit)
+    assert abs(spec.sole_offset) > 0.01  # the test models' soles sit 12-13 mm outward
+    for q, stance, _ in _samples(10, 3):
+        ref.pose(q, stance)
+        got = _box_bottom_in_s(ref, fit.feet[SIDES[stance]], stance)
+        heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
+        corners = foot_corners(np.zeros((1, 2)), heel, toe, half, spec.sole_shift(stance))[0]
+        planned = [
+            corners[:, 0].min(),
+            corners[:, 0].max(),
+            corners[:, 1].min(),
+            corners[:, 1].max(),
+        ]
+        np.testing.assert_allclose(got, planned, atol=1e-9, err_msg=f"stance {SIDES[stance]}")

@@ -30,7 +30,8 @@ def test_detection_finds_the_legs_their_signs_and_the_geometry():
                              "l_hip_yaw", "l_hip_roll", "r_hip_yaw", "r_hip_roll"}  # fmt: skip
     g = fit.geometry  # the file's numbers: hips 0.12 apart, thigh 0.2, shank 0.19, ...
     expected = {"thigh": 0.2, "shank": 0.19, "hip_width": 0.12, "ankle_height": 0.04,
-                "ankle_to_toe": 0.08, "foot_length": 0.14, "foot_width": 2 * 0.023}  # fmt: skip
+                "ankle_to_toe": 0.08, "foot_length": 0.14, "foot_width": 0.07,
+                "sole_offset": 0.012}  # fmt: skip
     assert g == pytest.approx(expected, abs=1e-12)
 
 
@@ -93,7 +94,8 @@ def test_cli_writes_a_spec_the_planner_reads(tmp_path, capsys):
     assert spec.name == "walker" and spec.stiffness == 30.0
     report = capsys.readouterr().out
     assert "joint_limits.knee: the model has no range; the default robot's" in report
-    assert "centred +12.0 mm off the ankle" in report
+    assert "centred +12.0 mm outward of the ankle (geometry.sole_offset)" in report
+    assert spec.foot_width == pytest.approx(0.07) and spec.sole_offset == pytest.approx(0.012)
     bad = tmp_path / "bad.xml"
     bad.write_text(WALKER.replace(NO_ROLL[0], "").replace(NO_ROLL[1], ""))
     assert main(["robot", "import", str(bad)]) == 2

@@ -8,6 +8,8 @@ brute force over its edges. A heel or toe offset wired wrongly (or 2 mm off) mov
 the polygon's vertices off the MJCF foot's corners.
 """
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
@@ -53,16 +55,17 @@ def _hull_margin(point, corners) -> float:
     return distance if inside else -distance
 
 
-@pytest.fixture  # per test: mutmut maps a test to the code its fixtures run
-def walk(spec):
-    return plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))
-
-
-def test_polygon_vertices_are_the_mjcf_sole_corners(spec, walk):
+@pytest.mark.parametrize("sole_offset", [0.0, 0.013, -0.007])  # [m] outward of the ankle
+def test_polygon_vertices_are_the_mjcf_sole_corners(spec, sole_offset):
+    spec = replace(spec, sole_offset=sole_offset)
+    walk = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0)))
     rect = _mjcf_sole_rectangle(spec)
-    np.testing.assert_allclose(rect[0], rect[1], atol=1e-12)  # both feet the same
-    stance_feet = walk.stance_sole[:, None, :2] + rect[0]  # (n, 4, 2)
-    swing_feet = walk.swing_sole[:, None, :2] + rect[0]
+    # the twin's soles mirror each other: the left one's centre sits sole_offset at +y
+    np.testing.assert_allclose(rect[0] * [1, -1], rect[1][[1, 0, 3, 2]], atol=1e-12)
+    assert rect[0][:, 1].mean() == pytest.approx(sole_offset, abs=1e-12)
+    stance = walk.stance[:, None, None]  # each row's stance foot picks its rectangle
+    stance_feet = walk.stance_sole[:, None, :2] + np.where(stance == 0, rect[0], rect[1])
+    swing_feet = walk.swing_sole[:, None, :2] + np.where(stance == 0, rect[1], rect[0])
     for k in range(0, walk.t.size, 13):
         if walk.double_support[k]:
             points = np.concatenate([stance_feet[k], swing_feet[k]])

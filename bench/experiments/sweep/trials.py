@@ -14,7 +14,7 @@ import itertools
 import json
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -31,7 +31,7 @@ CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that end
 
 def spec_text(spec: RobotSpec) -> str:
     """The robot's part of the ``trial_id`` text: its fields as sorted JSON."""
-    return json.dumps(asdict(spec), sort_keys=True, default=float)
+    return json.dumps(spec.as_dict(), sort_keys=True, default=float)
 
 
 @dataclass(frozen=True)

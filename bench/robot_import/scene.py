@@ -1,0 +1,241 @@
+"""A trial scene on the user's unmodified model: ``trial --model MODEL``.
+
+The model file is compiled as it is (its own bodies, actuators, contacts and options);
+MuJoCo's model-editing API (``mujoco.MjSpec``) only *adds* to it what a trial needs,
+never changes what is there:
+
+* the tilted floor plane (``model._add_world``'s: friction μ, condim 3, priority 1),
+  and a free joint on the base where the model fixes it to the world (a URDF);
+* the trial's sensors under the twin's names (``contact.add_trial_sensors``), pointing
+  at the model's own bodies and joints: each foot's contacts with the floor (all its
+  geoms), the mapped joints' angles and the actuator force on them (``JOINTACTFRC``),
+  the base's pose, and sites for the sole point under each ankle and each foot's axes
+  as the spec has them; ``contact.decode`` multiplies angles and torques by each mapped
+  joint's sign (the numeric ``slopewalk_joint_sign``), so the recording is in the
+  planner's convention;
+* for a joint (mapped or held) that no position actuator of the model drives (a model
+  with motors only), a position servo from the spec's [servo] table.
+
+The playback's 8 commands (MJCF order, planner signs) become the model's controls
+through ``controls``: a mapped joint's position actuator gets sign × its command, a
+held joint's the map's angle, every other actuator (a motor) 0. The trial's timestep
+replaces the model's; nothing else of its options changes. The floor's give is not fed
+forward on these scenes (``SoftFloor`` is measured on the twin's foot boxes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from slopewalk.bench.robot_import.fit import BaseFrame, Fit, posed
+from slopewalk.bench.robot_import.mapfile import SIDES
+from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
+from slopewalk.bench.sim.model import SceneError, mujoco_message, servo_settings
+from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX
+from slopewalk.planner.kinematics import Chain, rotation_slope_to_world
+from slopewalk.planner.spec import JOINT_LIMIT_KEYS, RobotSpec
+
+FLOOR = "slopewalk_floor"
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS  # playback.py's
+_SENSOR, _OBJ = mujoco.mjtSensor, mujoco.mjtObj
+_FOUND, _FORCE, _POS = 1, 2, 16  # mjtConDataField bits (contact.py's)
+_MINDIST, _NETFORCE = 1, 3
+
+
+@dataclass
+class ModelScene:
+    """The trial scene of an imported model (module doc).
+
+    Attributes:
+        fit: The model fitted to the planner (``fit.fit_model``).
+        spec: The imported spec (the plan's robot).
+    """
+
+    fit: Fit
+    spec: RobotSpec
+
+    @property
+    def name(self) -> str:
+        """The model's name, marking the trial's outputs."""
+        return self.fit.name
+
+    def joints(self) -> list[tuple[str, float]]:
+        """(model joint name, sign) of each MJCF joint (``joints.MJCF_JOINTS`` order)."""
+        return [
+            (self.fit.legs[side][kind].name, float(self.fit.legs[side][kind].sign))
+            for side in SIDES
+            for kind in JOINT_LIMIT_KEYS
+        ]
+
+    def build(self, plan, *, friction: float, actuators: str, timestep: float) -> mujoco.MjModel:
+        """The model on the plan's tilted plane with the trial's sensors (module doc)."""
+        servo = servo_settings(self.spec, actuators)
+        if servo.kp != self.spec.stiffness:
+            raise SceneError(
+                f"--actuators {actuators}: a model plays on its own actuators (gains "
+                "the spec's [servo]); use servo or servo_ff"
+            )
+        mjs = mujoco.MjSpec.from_file(self.fit.path)
+        mjs.option.timestep = timestep
+        mjs.worldbody.add_geom(
+            name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
+            quat=_quat(rotation_slope_to_world(plan.params.slope)),
+            friction=[friction, 0.005, 0.0001], condim=3, priority=1, contype=1, conaffinity=1,
+        )  # fmt: skip
+        base = mjs.body(self.fit.model.body(self.fit.base).name)
+        if not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in base.joints):
+            base.add_freejoint()
+        self._add_servos(mjs)
+        self._add_sites(mjs)
+        self._add_sensors(mjs)
+        mjs.add_numeric(name=JOINT_SIGN, data=[sign for _, sign in self.joints()])
+        try:
+            return mjs.compile()
+        except ValueError as err:
+            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+
+    def _position_actuated(self, mjs: mujoco.MjSpec) -> set[str]:
+        """Joints a position actuator of the model drives (gear 1, kp = the spec's)."""
+        out = set()
+        for act in mjs.actuators:
+            kp, bias = act.gainprm[0], act.biasprm
+            if act.trntype != mujoco.mjtTrn.mjTRN_JOINT or bias[1] != -kp or kp <= 0:
+                continue
+            if act.gear[0] != 1:
+                raise SceneError(f"actuator {act.name!r}: gear {act.gear[0]:g}; must be 1")
+            out.add(act.target)
+        return out
+
+    def _add_servos(self, mjs: mujoco.MjSpec) -> None:
+        have = self._position_actuated(mjs)
+        spec = self.spec
+        for joint in [name for name, _ in self.joints()] + list(self.fit.held):
+            if joint in have:
+                continue
+            act = mjs.add_actuator(name=f"slopewalk_{joint}", target=joint)
+            act.trntype = mujoco.mjtTrn.mjTRN_JOINT
+            act.set_to_position(kp=spec.stiffness, kv=spec.velocity_gain)
+            act.forcelimited = True
+            act.forcerange = [-spec.stall_torque, spec.stall_torque]
+
+    def _add_sites(self, mjs: mujoco.MjSpec) -> None:
+        """Sole point and spec-aligned axes on each foot; the spec's pelvis frame on the base."""
+        model, fit = self.fit.model, self.fit
+        ref = posed(model, fit.qpos)
+        frame = BaseFrame(ref, fit.base)
+        for side, prefix in zip(SIDES, SIDE_PREFIX, strict=True):
+            foot = fit.feet[side]
+            sole = fit.ankle_centre(side) - [0, 0, fit.geometry["ankle_height"]]
+            world = frame.R @ sole + frame.p
+            R_foot = ref.xmat[foot].reshape(3, 3)
+            mjs.body(model.body(foot).name).add_site(
+                name=f"{prefix}sole",
+                pos=R_foot.T @ (world - ref.xpos[foot]),
+                quat=_quat(R_foot.T @ frame.R),
+            )
+        mjs.body(model.body(fit.base).name).add_site(name="slopewalk_pelvis", pos=fit.pelvis_origin)
+
+    def _add_sensors(self, mjs: mujoco.MjSpec) -> None:
+        """``contact.add_trial_sensors``'s sensors, by name, on the model's parts."""
+        fit, model = self.fit, self.fit.model
+        feet = [model.body(fit.feet[side]).name for side in SIDES]
+        for geom, foot in zip(FOOT_GEOMS, feet, strict=True):
+            for suffix, prm in (
+                ("contacts", [_FOUND | _FORCE | _POS, _MINDIST, MAX_CONTACTS]),
+                ("net", [_FORCE, _NETFORCE, 1]),
+            ):
+                mjs.add_sensor(
+                    name=f"{geom}_{suffix}", type=_SENSOR.mjSENS_CONTACT, objtype=_OBJ.mjOBJ_BODY,
+                    objname=foot, reftype=_OBJ.mjOBJ_GEOM, refname=FLOOR, intprm=prm,
+                )  # fmt: skip
+        links = {"thigh": "hip_pitch", "shank": "knee", "ankle": "ankle_pitch"}
+        for body in NON_FOOT_BODIES:
+            if body == "pelvis":
+                carrier = model.body(fit.base).name
+            else:
+                side = SIDES[SIDE_PREFIX.index(body[:2])]
+                carrier = model.body(fit.legs[side][links[body[2:]]].body).name
+            mjs.add_sensor(
+                name=f"{body}_touch", type=_SENSOR.mjSENS_CONTACT, objtype=_OBJ.mjOBJ_BODY,
+                objname=carrier, reftype=_OBJ.mjOBJ_GEOM, refname=FLOOR,
+                intprm=[_FOUND, _NETFORCE, 1],
+            )  # fmt: skip
+        for p in SIDE_PREFIX:
+            for name, kind in (("sole_pos", "FRAMEPOS"), ("foot_zaxis", "FRAMEZAXIS")):
+                mjs.add_sensor(
+                    name=f"{p}{name}", type=getattr(_SENSOR, f"mjSENS_{kind}"),
+                    objtype=_OBJ.mjOBJ_SITE, objname=f"{p}sole",
+                )  # fmt: skip
+        for name, kind in (("pelvis_pos", "FRAMEPOS"), ("pelvis_quat", "FRAMEQUAT")):
+            mjs.add_sensor(
+                name=name, type=getattr(_SENSOR, f"mjSENS_{kind}"),
+                objtype=_OBJ.mjOBJ_SITE, objname="slopewalk_pelvis",
+            )  # fmt: skip
+        for twin, (joint, _) in zip(MJCF_JOINTS, self.joints(), strict=True):
+            for suffix, kind in (("pos", "JOINTPOS"), ("torque", "JOINTACTFRC")):
+                mjs.add_sensor(
+                    name=f"{twin}_{suffix}", type=getattr(_SENSOR, f"mjSENS_{kind}"),
+                    objtype=_OBJ.mjOBJ_JOINT, objname=joint,
+                )  # fmt: skip
+
+    def controls(self, model: mujoco.MjModel, q_ref: np.ndarray) -> np.ndarray:
+        """The model's controls (m, nu) from the playback's commands (m, 8) (module doc)."""
+        q_ref = np.atleast_2d(q_ref)
+        mapped = {name: (k, sign) for k, (name, sign) in enumerate(self.joints())}
+        A, b = np.zeros((model.nu, 8)), np.zeros(model.nu)
+        for a in range(model.nu):
+            kp = model.actuator_gainprm[a, 0]
+            position = kp > 0 and model.actuator_biasprm[a, 1] == -kp
+            if model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT or not position:
+                continue  # a motor (or another transmission): no command
+            joint = model.joint(model.actuator_trnid[a, 0]).name
+            if joint in mapped:
+                k, sign = mapped[joint]
+                A[a, k] = sign
+            elif joint in self.fit.held:
+                b[a] = self.fit.held[joint]
+        return q_ref @ A.T + b
+
+    def initial_state(self, model: mujoco.MjModel, plan) -> np.ndarray:
+        """Full physics state at the plan's first pose, soles on the plane, held joints held."""
+        fit = self.fit
+        chain = Chain.from_spec(plan.spec)
+        frames = chain.frames(plan.q[:1], plan.stance_sole[:1], plan.stance[:1])
+        (pelvis, ), (rotation, ) = chain.pelvis_pose(frames, plan.stance[:1])  # fmt: skip
+        R_ws = rotation_slope_to_world(plan.params.slope)
+        data = mujoco.MjData(model)
+        for j in range(fit.model.njnt):  # the reference pose, joint by joint (a free joint
+            if fit.model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:  # added to a URDF's base
+                continue  # moves the addresses)
+            src, dst = fit.model.jnt_qposadr[j], model.joint(fit.model.joint(j).name).qposadr[0]
+            data.qpos[dst] = fit.qpos[src]
+        base = model.body(fit.model.body(fit.base).name).id
+        free = [j for j in range(model.njnt) if model.jnt_bodyid[j] == base
+                and model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]  # fmt: skip
+        adr = model.jnt_qposadr[free[0]]
+        R_base = R_ws @ rotation
+        data.qpos[adr : adr + 3] = R_ws @ pelvis - R_base @ fit.pelvis_origin
+        mujoco.mju_mat2Quat(data.qpos[adr + 3 : adr + 7], R_base.reshape(-1))
+        for (name, sign), value in zip(self.joints(), plan.q_left_right[0], strict=True):
+            data.qpos[model.joint(name).qposadr[0]] = sign * value
+        for name, value in fit.held.items():
+            data.qpos[model.joint(name).qposadr[0]] = value
+        data.ctrl[:] = self.controls(model, plan.q_left_right[0])[0]
+        mujoco.mj_forward(model, data)
+        state = np.empty(mujoco.mj_stateSize(model, _STATE))
+        mujoco.mj_getState(model, data, state, _STATE)
+        return state
+
+
+def _quat(R: np.ndarray) -> np.ndarray:
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R).reshape(-1))
+    return quat
+
+
+class ModelSceneError(SlopewalkError):
+    """A model that cannot be played as a trial scene."""
