@@ -35,7 +35,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-_SOURCES = ("tables.py", "sample.py", "run.py")
+_SOURCES = ("tables.py", "sample.py", "run.py", "dynamics.py", "servo.py")
 
 
 def sources_hash() -> str:
