@@ -210,8 +210,7 @@ def servo_walk(
     k0 = gravity_k[0] + stiffness * eye
     f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])
     d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
-    gains = (float(stiffness), float(velocity_gain), float(damping), float(armature))
-    gains += (float(force_limit),)
+    gains = tuple(float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit))
     dt = np.diff(plan.t, prepend=plan.t[0])
     args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
     solved = _integrate_compiled(*args, gains, d) if compiled else None
