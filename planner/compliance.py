@@ -73,6 +73,7 @@ def compliant_walk(
     damping: float = 0.0,
     armature: float = 0.0,
     feedforward: np.ndarray | None = None,
+    compiled: bool = True,
 ) -> CompliantWalk:
     """The walk a servo of stiffness kp reaches when commanded ``plan.q`` (see module doc).
 
@@ -83,14 +84,29 @@ def compliant_walk(
         damping: Joint damping d [N m s/rad].
         armature: Rotor inertia A [kg m²].
         feedforward: τ_ff fed into the loop [N m], Table-I order, (n, 8); None for none.
+        compiled: Iterate on the compiled torques (``kernel.servo.fixed_point``); False:
+            on this module's numpy ``_Dynamics``, the reference.
     """
     if not stiffness > 0:
         raise SlopewalkError(f"stiffness {stiffness!r} N m/rad: must be > 0")
     tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward)
     dynamics = _Dynamics(plan)
-    delta = np.zeros_like(plan.q)
     qd, qdd = plan.qd, plan.qdd
     rate_terms = armature * qdd + (damping + velocity_gain) * qd - tau_ff
+    if compiled:
+        delta, iterations, change = _fixed_point_compiled(plan, rate_terms, stiffness)
+    else:
+        delta, iterations, change = _fixed_point(dynamics, plan, rate_terms, stiffness)
+    converged = bool(change < TOLERANCE)
+    walk = dynamics.plan_of(plan.q + delta, qd, qdd)
+    loop = -stiffness * delta - velocity_gain * qd + tau_ff
+    return CompliantWalk(walk, -delta, iterations, converged, loop)
+
+
+def _fixed_point(dynamics, plan, rate_terms, stiffness):
+    """δ = −(τ(q_ref + δ) + rate terms) / kp iterated from 0 (module doc): δ, iterations, change."""
+    qd, qdd = plan.qd, plan.qdd
+    delta = np.zeros_like(plan.q)
     change, iterations = np.inf, 0
     while iterations < MAX_ITERATIONS and not change < TOLERANCE:
         tau = dynamics.torque(plan.q + delta, qd, qdd)
@@ -99,10 +115,19 @@ def compliant_walk(
         delta, iterations = new, iterations + 1
         if not np.isfinite(change):
             break
-    converged = bool(change < TOLERANCE)
-    walk = dynamics.plan_of(plan.q + delta, qd, qdd)
-    loop = -stiffness * delta - velocity_gain * qd + tau_ff
-    return CompliantWalk(walk, -delta, iterations, converged, loop)
+    return delta, iterations, change
+
+
+def _fixed_point_compiled(plan, rate_terms, stiffness):
+    """``_fixed_point`` on the compiled kernel (``kernel.servo.fixed_point``)."""
+    from slopewalk.planner.kernel import dynamics, servo
+
+    chain, gravity, side, sole, share = dynamics.plan_inputs(plan)
+    q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (plan.q, plan.qd, plan.qdd))
+    terms = np.ascontiguousarray(rate_terms, dtype=float)
+    args = (chain, gravity, q, qd, qdd, side, sole, share, terms, float(stiffness))
+    delta, iterations, change = servo.fixed_point(*args, TOLERANCE, MAX_ITERATIONS)
+    return delta, int(iterations), float(change)
 
 
 class _Dynamics:

@@ -164,6 +164,7 @@ def servo_walk(
     force_limit: float = np.inf,
     feedforward: np.ndarray | None = None,
     closed_chain: bool = True,
+    compiled: bool = True,
 ) -> CompliantWalk:
     """The walk a servo loop makes, integrated through time (module doc).
 
@@ -178,6 +179,9 @@ def servo_walk(
         feedforward: τ_ff fed into the loop [N m], Table-I order, (n, 8); None for none.
         closed_chain: In double support the second sole stays where it is on the plane
             (module doc); False: it moves with the sway, loaded by the plan's split.
+        compiled: Linearise and integrate on the compiled kernel
+            (``kernel.dynamics``, ``kernel.servo``); False: this module's numpy
+            (``linearised``, ``support_jacobian``, ``_integrate``), the reference.
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
@@ -189,38 +193,91 @@ def servo_walk(
         raise SlopewalkError(f"stiffness {stiffness!r} N m/rad: must be > 0")
     if not force_limit > 0:
         raise SlopewalkError(f"force_limit {force_limit!r} N m: must be > 0")
-    tau, mass, gravity_k, velocity_c = linearised(plan)
-    tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward)
-    n, dof = plan.q.shape
-    eye = np.eye(dof)
+    both = plan.double_support & closed_chain
+    if compiled:
+        tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
+        jac = np.ascontiguousarray(jac[:, HELD])
+    else:
+        tau, mass, gravity_k, velocity_c = linearised(plan)
+        # the held rows of the second sole's Jacobian, (n, 4, dof); read only where `both`
+        n, dof = plan.q.shape
+        jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
+    tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward, float)
+    eye = np.eye(plan.q.shape[1])
     # what the joint needs beyond its own sway: τ_ref + A q̈_ref + d q̇_ref
     need = tau + armature * plan.qdd + damping * plan.qd
-    dt = np.diff(plan.t, prepend=plan.t[0])
-    delta = np.zeros((n, dof))
-    rate = np.zeros((n, dof))
-    accel = np.zeros((n, dof))
-    loop = np.zeros((n, dof))
-    both = plan.double_support & closed_chain
-    # the held rows of the second sole's Jacobian, (n, 4, dof); read only where `both`
-    jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
     # start at rest in the static fixed point of the first sample (the robot has settled)
     k0 = gravity_k[0] + stiffness * eye
     f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])
     d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
+    gains = tuple(float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit))
+    dt = np.diff(plan.t, prepend=plan.t[0])
+    args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
+    solved = _integrate_compiled(*args, gains, d) if compiled else None
+    if solved is not None and solved[-1]:
+        delta, rate, accel, loop, finite = solved[:-1]
+    else:  # the reference, or a singular system met on the compiled path (kernel.servo)
+        jac = support_jacobian(plan)[:, HELD] if both.any() else jac
+        args = args[:-1] + (jac,)
+        delta, rate, accel, loop, finite = _integrate(*args, gains, d)
+    dyn = _Dynamics(plan)
+    walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel)
+    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop)
+
+
+def _linearised_compiled(plan: Plan):
+    """``linearised`` and ``support_jacobian`` on the compiled kernel (``kernel.dynamics``)."""
+    from slopewalk.planner.kernel import dynamics
+
+    chain, gravity, side, sole, share = dynamics.plan_inputs(plan)
+    q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (plan.q, plan.qd, plan.qdd))
+    return dynamics.linearised(chain, gravity, q, qd, qdd, side, sole, share, STEP)
+
+
+def _integrate_compiled(*args):
+    """``_integrate`` on the compiled kernel (``kernel.servo.integrate``)."""
+    from slopewalk.planner.kernel import servo
+
+    arrays = [np.ascontiguousarray(a) for a in args[:-2]]
+    return servo.integrate(*arrays, args[-2], np.ascontiguousarray(args[-1], dtype=float))
+
+
+def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, both, jac, gains, d):
+    """The servo loop's δ, δ̇, δ̈ and request kp (−δ) − kv q̇ + τ_ff through time (module doc).
+
+    Args:
+        mass, gravity_k, velocity_c: M, K_g, C along the plan, (n, 8, 8) (``linearised``).
+        need: τ_ref + A q̈_ref + d q̇_ref [N m], (n, 8).
+        qd_ref: The plan's joint rates [rad/s], (n, 8). tau_ff: Feedforward [N m], (n, 8).
+        dt: Time step to each sample [s], (n,) (0 at the first).
+        stance: Stance side per sample, (n,). both: The second sole held, (n,) bool.
+        jac: Its held rows of the pose Jacobian, (n, 4, 8).
+        gains: (kp, kv, damping, armature, τ_max). d: δ at the first sample [rad], (8,).
+
+    Returns:
+        δ, δ̇, δ̈, the request (n, 8) each, and False where the loop let go (|δ| ≥ π).
+    """
+    stiffness, velocity_gain, damping, armature, force_limit = gains
+    n, dof = need.shape
+    eye = np.eye(dof)
+    delta = np.zeros((n, dof))
+    rate = np.zeros((n, dof))
+    accel = np.zeros((n, dof))
+    loop = np.zeros((n, dof))
     v = np.zeros(dof)
     finite = True
     for k in range(n):
         h = dt[k]
-        if k and plan.stance[k] != plan.stance[k - 1]:
+        if k and stance[k] != stance[k - 1]:
             # the legs swap roles: Table-I order reverses (stance roll … ↔ … swing roll)
             d, v = d[::-1].copy(), v[::-1].copy()
-        raw = -stiffness * d - velocity_gain * (plan.qd[k] + v) + tau_ff[k]
+        raw = -stiffness * d - velocity_gain * (qd_ref[k] + v) + tau_ff[k]
         free = np.abs(raw) <= force_limit
         held = np.where(free, 0.0, np.clip(raw, -force_limit, force_limit))
         m = mass[k] + armature * eye
         c = velocity_c[k] + (damping + np.where(free, velocity_gain, 0.0)) * eye
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
-        force = held + np.where(free, tau_ff[k] - velocity_gain * plan.qd[k], 0.0) - need[k]
+        force = held + np.where(free, tau_ff[k] - velocity_gain * qd_ref[k], 0.0) - need[k]
         v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if both[k] and h > 0 else None)
         if not (np.isfinite(d).all() and np.abs(d).max() < np.pi):
             finite = False  # the loop has let go of the plan: hold the last pose
@@ -229,6 +286,4 @@ def servo_walk(
             break
         delta[k], rate[k], accel[k] = d, v, a
         loop[k] = raw
-    dyn = _Dynamics(plan)
-    walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel)
-    return CompliantWalk(walk, -delta, n, finite, loop)
+    return delta, rate, accel, loop, finite

@@ -6,6 +6,10 @@ sample list); ``sample`` is the per-sample pipeline (spline gait in closed form,
 IK, FK, Newton-Euler, multibody ZMP, support polygon and margin, friction ratio,
 joint power); ``run`` drives it over a plan's samples or over a GA population
 (``prange``, one thread per individual).
+``dynamics`` runs the same per-block stages on joint motion that is not a gait's (the
+walk a servo reaches: torques and their linearisation), and ``servo`` the servo loop
+through time and the compliance fixed point on them (the per-trial predictors of
+``servo_loop`` and ``compliance``, whose numpy code stays as the reference).
 
 Compiled code is cached (``cache=True``) in the user's cache directory, never in
 the source tree, so the package works from a read-only install: unless the user
@@ -35,7 +39,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-_SOURCES = ("tables.py", "sample.py", "run.py")
+_SOURCES = ("tables.py", "sample.py", "run.py", "dynamics.py", "servo.py")
 
 
 def sources_hash() -> str:

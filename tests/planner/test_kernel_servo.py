@@ -1,0 +1,104 @@
+"""The compiled servo-loop predictors (planner/kernel/dynamics.py, servo.py) against their
+numpy twins (compliance._Dynamics, servo_loop.linearised / support_jacobian / _integrate).
+
+Tolerances are properties of the sums, not of this machine: the torques are the same
+sums in another order (rounding ~1e-15 of their scale, held to 1e-9); the central
+differences of K_g, C and the sole's Jacobian divide that rounding by their step
+(1e-6): held to 1e-6 of the torque's scale; the loop through time is backward Euler,
+contractive, so the walks made stay within 1e-8 rad.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from slopewalk.planner import servo_loop
+from slopewalk.planner.compliance import _Dynamics, compliant_walk
+from slopewalk.planner.gait import GaitParams
+from slopewalk.planner.kernel import dynamics, servo
+from slopewalk.planner.plan import plan_walk
+
+
+@pytest.fixture(scope="module")
+def plan(spec):
+    """Two 0.5 s steps up 10°: both stances, double support, a swap of the legs."""
+    return plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
+
+
+@pytest.fixture(scope="module")
+def inputs(plan):
+    return dynamics.plan_inputs(plan)
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), size=st.floats(0.01, 0.5))
+def test_compiled_torques_are_the_numpy_torques_at_sampled_states(plan, inputs, seed, size):
+    """Random joint angles, rates and accelerations about the plan: every term of the
+    recursion (Coriolis, the swing split in double support) is loaded."""
+    rng = np.random.default_rng(seed)
+    shape = plan.q.shape
+    q = plan.q + size * rng.standard_normal(shape)
+    qd = plan.qd + 10 * size * rng.standard_normal(shape)
+    qdd = plan.qdd + 100 * size * rng.standard_normal(shape)
+    chain, gravity, side, sole, share = inputs
+    got = dynamics.torques(chain, gravity, q, qd, qdd, side, sole, share)
+    want = _Dynamics(plan).torque(q, qd, qdd)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
+
+
+def test_compiled_linearisation_is_the_numpy_one(plan):
+    tau, mass, stiff, vel, jac = servo_loop._linearised_compiled(plan)
+    want = servo_loop.linearised(plan) + (servo_loop.support_jacobian(plan),)
+    scale = np.abs(want[0]).max()
+    assert plan.double_support.any() and (~plan.double_support).any()
+    np.testing.assert_allclose(tau, want[0], rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(mass, want[1], rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(stiff, want[2], rtol=0, atol=1e-6 * scale)
+    np.testing.assert_allclose(vel, want[3], rtol=0, atol=1e-6 * scale)
+    np.testing.assert_allclose(jac, want[4], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("limit", [np.inf, 0.3])
+def test_compiled_servo_walk_is_the_numpy_one(spec, plan, limit):
+    """The AX-12A loop with feedforward; at 0.3 N m its output clips (the clipped rows)."""
+    kw = dict(
+        stiffness=spec.stiffness,
+        velocity_gain=0.05,
+        damping=spec.stall_torque / spec.no_load_speed,
+        armature=spec.armature,
+        force_limit=limit,
+        feedforward=0.5 * plan.tau,
+    )
+    got = servo_loop.servo_walk(plan, **kw)
+    want = servo_loop.servo_walk(plan, compiled=False, **kw)
+    assert np.isfinite(limit) == (np.abs(want.loop_torque) > limit).any()
+    assert got.converged == want.converged
+    np.testing.assert_allclose(got.deflection, want.deflection, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(got.plan.zmp, want.plan.zmp, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(got.loop_torque, want.loop_torque, rtol=0, atol=1e-6)
+
+
+def test_compiled_fixed_point_is_the_numpy_one(spec, plan):
+    kw = dict(stiffness=spec.stiffness, armature=spec.armature, velocity_gain=0.1)
+    got = compliant_walk(plan, **kw)
+    want = compliant_walk(plan, compiled=False, **kw)
+    assert (got.iterations, got.converged) == (want.iterations, want.converged)
+    np.testing.assert_allclose(got.deflection, want.deflection, rtol=0, atol=1e-10)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 12))
+def test_the_lu_solve_is_numpys_on_regular_systems(seed, n):
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((n, n)) + n * np.eye(n)
+    b = rng.standard_normal(n)
+    x, ok = servo._solve(a, b)
+    assert ok
+    np.testing.assert_allclose(a @ x, b, rtol=0, atol=1e-12 * n * np.abs(b).max())
+
+
+def test_a_singular_system_is_reported_not_solved():
+    """Where LU cannot be numpy's minimum-norm answer, the caller must run the numpy twin."""
+    a = np.ones((3, 3))
+    assert not servo._solve(a, np.ones(3))[1]
