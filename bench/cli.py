@@ -131,9 +131,19 @@ def _trial_parser(sub) -> None:
         "slopewalk trial --step-time 0.6 --controller "
         "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
         "slopewalk trial --step-time 1 --slope 20 --command-noise 1e-4 --noise-seed 3 --out t.json",
+        "slopewalk trial --model walker.xml --map walker-map.toml --robot walker.toml "
+        "--step-time 3 --tilt 9 --steps 2 --out t.json",
     )
     add_gait_flags(p)
     add_sim_flags(p)
+    p.add_argument(
+        "--model",
+        metavar="MODEL",
+        help="play the plan on this unmodified MJCF/URDF robot instead of the spec's twin "
+        "(open loop, servo or servo_ff; --robot: its spec from `slopewalk robot import`, "
+        "default: imported now; docs/importing-robots.md)",
+    )
+    p.add_argument("--map", metavar="MAP.toml", help="--model's map file (only with --model)")
     p.add_argument(
         "--command-noise",
         type=number(COMMAND_NOISE_DEG),

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from slopewalk.bench.robot_import.fit import BaseFrame, Fit, posed
-from slopewalk.bench.robot_import.mapfile import SIDES
+from slopewalk.bench.robot_import.fit import BaseFrame, Fit, fit_model, posed
+from slopewalk.bench.robot_import.mapfile import SIDES, load_map
 from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
 from slopewalk.bench.sim.floor import SoftFloor
 from slopewalk.bench.sim.model import SceneError, mujoco_message, servo_settings
@@ -275,6 +275,24 @@ class ModelScene:
         state = np.empty(mujoco.mj_stateSize(model, _STATE))
         mujoco.mj_getState(model, data, state, _STATE)
         return state
+
+
+def model_scene(model_path, map_path=None, spec: RobotSpec | None = None) -> ModelScene:
+    """The trial scene of the model at ``model_path`` (``trial --model``): fitted with the
+    map at ``map_path`` (None: detect everything); ``spec`` the plan's robot (``--robot``),
+    None: the spec ``robot import`` writes for it.
+
+    Raises:
+        RobotImportError: the model or map cannot be read or does not fit, in one line.
+    """
+    from slopewalk.bench.robot_import.write import imported_spec
+    from slopewalk.planner.spec import spec_from_dict
+
+    robot_map = load_map(map_path)
+    fit = fit_model(model_path, robot_map)
+    if spec is None:
+        spec = spec_from_dict(imported_spec(fit, robot_map)[0])
+    return ModelScene(fit, spec)
 
 
 def _quat(R: np.ndarray) -> np.ndarray:
