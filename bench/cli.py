@@ -142,8 +142,6 @@ def _trial_parser(sub) -> None:
         "slopewalk trial --step-time 0.6 --controller "
         "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback --out t.json",
         "slopewalk trial --step-time 1 --slope 20 --command-noise 1e-4 --noise-seed 3 --out t.json",
-        "slopewalk trial --model walker.xml --map walker-map.toml --robot walker.toml "
-        "--step-time 3 --tilt 9 --steps 2 --out t.json",
     )
     add_gait_flags(p)
     add_sim_flags(p)
