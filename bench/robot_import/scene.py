@@ -224,8 +224,8 @@ class ModelScene:
             points.append(frame.point(world) - centre)
         if not points:
             return None
-        points = np.concatenate(points)
-        bottom = points[np.abs(points[:, 2] - points[:, 2].min()) < 1e-6]
+        every = np.concatenate(points)
+        bottom = every[np.abs(every[:, 2] - every[:, 2].min()) < 1e-6]
         return bottom[:, :2]
 
     def controls(self, model: mujoco.MjModel, q_ref: np.ndarray) -> np.ndarray:
