@@ -114,6 +114,17 @@ def _robot_parser(sub) -> None:
     imp.set_defaults(run=commands.robot_import)
 
 
+def _model_flags(p) -> None:
+    p.add_argument(
+        "--model",
+        metavar="MODEL",
+        help="play the plan on this unmodified MJCF/URDF robot instead of the spec's twin "
+        "(open loop, servo or servo_ff; --robot: its spec from `slopewalk robot import`, "
+        "default: imported now; docs/importing-robots.md)",
+    )
+    p.add_argument("--map", metavar="MAP.toml", help="--model's map file (only with --model)")
+
+
 def _trial_parser(sub) -> None:
     p = _command(
         sub,
@@ -134,6 +145,7 @@ def _trial_parser(sub) -> None:
     )
     add_gait_flags(p)
     add_sim_flags(p)
+    _model_flags(p)
     p.add_argument(
         "--command-noise",
         type=number(COMMAND_NOISE_DEG),

@@ -150,7 +150,7 @@ def trial(args: argparse.Namespace) -> None:
         from slopewalk.bench.controllers import load_controller
 
         load_controller(args.controller)  # a bad name is refused before any work
-    spec = load_spec(args.robot)
+    spec, scene = _trial_robot(args, load_spec)
     trial = TrialSpec(
         gait_from_args(args, spec),
         friction=args.friction,
@@ -160,10 +160,13 @@ def trial(args: argparse.Namespace) -> None:
         noise_seed=args.noise_seed or 0,
     )
     plan = trial_checked(spec, trial)  # its size said first; a walk the ground must pull refused
-    result = run_trial(spec, trial, plan=plan)
+    result = run_trial(spec, trial, plan=plan, scene=scene)
+    scalars = result.scalars()
+    if scene is not None:  # marked with the model it was played on
+        scalars["model"] = {"name": scene.name, "path": str(args.model), "map": args.map}
     with atomic_paths(*outputs.values()) as tmps:
         tmp = dict(zip(outputs, tmps, strict=True))
-        tmp["--out"].write_text(json.dumps(result.scalars(), indent=2, allow_nan=False) + "\n")
+        tmp["--out"].write_text(json.dumps(scalars, indent=2, allow_nan=False) + "\n")
         if "--series" in tmp:
             with open(tmp["--series"], "wb") as f:
                 np.savez_compressed(f, **result.series)
@@ -175,6 +178,27 @@ def trial(args: argparse.Namespace) -> None:
             )
     print("\n".join(result.summary_lines()))
     print("wrote " + ", ".join(str(p) for p in outputs.values()))
+
+
+def _trial_robot(args: argparse.Namespace, load_spec):
+    """(spec, scene) of ``trial``: the twin of ``--robot`` (scene None), or ``--model``'s
+    scene (``robot_import.scene.model_scene``; the spec ``--robot``'s or imported now)."""
+    if args.model is None:
+        if args.map is not None:
+            raise SlopewalkError(f"--map {args.map!r}: only with --model, which is not given")
+        return load_spec(args.robot), None
+    for flag, given in (("--controller", args.controller), ("--record", args.record),
+                        ("--video", args.video)):  # fmt: skip
+        if given is not None:
+            raise SlopewalkError(
+                f"{flag} with --model: not yet (a model plays open loop, recorded as "
+                "--out and --series)"
+            )
+    from slopewalk.bench.robot_import.scene import model_scene
+
+    spec = load_spec(args.robot) if args.robot is not None else None
+    scene = model_scene(args.model, args.map, spec)
+    return scene.spec, scene
 
 
 def _check_media_flags(args: argparse.Namespace) -> None:

@@ -19,8 +19,11 @@ never changes what is there:
 The playback's 8 commands (MJCF order, planner signs) become the model's controls
 through ``controls``: a mapped joint's position actuator gets sign × its command, a
 held joint's the map's angle, every other actuator (a motor) 0. The trial's timestep
-replaces the model's; nothing else of its options changes. The floor's give is not fed
-forward on these scenes (``SoftFloor`` is measured on the twin's foot boxes).
+replaces the model's; nothing else of its options changes (a model's own contact cone
+and impratio stay: MuJoCo's defaults, pyramidal and 1, where it sets none, against the
+twin's elliptic and 10). The floor's give is fed forward as on the twin (``floor``): the
+contact's constants from the floor (its priority makes them the contact's), the foot's
+inverse mass, and the corners of every box of the sole.
 """
 
 from __future__ import annotations
@@ -30,9 +33,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from slopewalk.bench.robot_import.fit import BaseFrame, Fit, posed
-from slopewalk.bench.robot_import.mapfile import SIDES
+from slopewalk.bench.robot_import.fit import BaseFrame, Fit, fit_model, posed
+from slopewalk.bench.robot_import.mapfile import SIDES, load_map
 from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
+from slopewalk.bench.sim.floor import SoftFloor
 from slopewalk.bench.sim.model import SceneError, mujoco_message, servo_settings
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX
@@ -182,6 +186,48 @@ class ModelScene:
                     objtype=_OBJ.mjOBJ_JOINT, objname=joint,
                 )  # fmt: skip
 
+    def floor(self, model: mujoco.MjModel) -> SoftFloor:
+        """The soft floor under this model's feet (``floor.SoftFloor``, module doc).
+
+        The corners are the bottom corners of each foot's box collision geoms at the
+        reference pose, in the spec's sole axes from its sole rectangle's centre; a foot
+        with any other collision shape keeps the rectangle's 4 corners.
+        """
+        g = model.geom(FLOOR).id
+        timeconst, dampratio = (float(v) for v in model.geom_solref[g])
+        d0, d_max, width, midpoint, power = (float(v) for v in model.geom_solimp[g][:5])
+        fit = self.fit
+        foot = model.body(fit.model.body(fit.feet[SIDES[0]]).name).id
+        corners = [self._sole_corners(side) for side in SIDES]
+        return SoftFloor(
+            timeconst, dampratio, (d0, d_max, width, midpoint, power),
+            float(model.body_invweight0[foot, 0]),
+            None if any(c is None for c in corners) else tuple(corners),
+        )  # fmt: skip
+
+    def _sole_corners(self, side: str) -> np.ndarray | None:
+        fit, model, spec = self.fit, self.fit.model, self.spec
+        ref = posed(model, fit.qpos)
+        frame = BaseFrame(ref, fit.base)
+        centre = fit.ankle_centre(side) - [0, 0, fit.geometry["ankle_height"]]
+        centre = centre + [(spec.ankle_to_toe - spec.heel_offset) / 2, 0.0, 0.0]
+        centre[1] += spec.sole_shift(SIDES.index(side))
+        points = []
+        for g in np.flatnonzero(model.geom_bodyid == fit.feet[side]):
+            if not (model.geom_contype[g] or model.geom_conaffinity[g]):
+                continue
+            if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX:
+                return None
+            signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+            local = signs * model.geom_size[g]
+            world = ref.geom_xpos[g] + local @ ref.geom_xmat[g].reshape(3, 3).T
+            points.append(frame.point(world) - centre)
+        if not points:
+            return None
+        every = np.concatenate(points)
+        bottom = every[np.abs(every[:, 2] - every[:, 2].min()) < 1e-6]
+        return bottom[:, :2]
+
     def controls(self, model: mujoco.MjModel, q_ref: np.ndarray) -> np.ndarray:
         """The model's controls (m, nu) from the playback's commands (m, 8) (module doc)."""
         q_ref = np.atleast_2d(q_ref)
@@ -229,6 +275,24 @@ class ModelScene:
         state = np.empty(mujoco.mj_stateSize(model, _STATE))
         mujoco.mj_getState(model, data, state, _STATE)
         return state
+
+
+def model_scene(model_path, map_path=None, spec: RobotSpec | None = None) -> ModelScene:
+    """The trial scene of the model at ``model_path`` (``trial --model``): fitted with the
+    map at ``map_path`` (None: detect everything); ``spec`` the plan's robot (``--robot``),
+    None: the spec ``robot import`` writes for it.
+
+    Raises:
+        RobotImportError: the model or map cannot be read or does not fit, in one line.
+    """
+    from slopewalk.bench.robot_import.write import imported_spec
+    from slopewalk.planner.spec import spec_from_dict
+
+    robot_map = load_map(map_path)
+    fit = fit_model(model_path, robot_map)
+    if spec is None:
+        spec = spec_from_dict(imported_spec(fit, robot_map)[0])
+    return ModelScene(fit, spec)
 
 
 def _quat(R: np.ndarray) -> np.ndarray:

@@ -101,12 +101,17 @@ class SoftFloor:
         dampratio: ``solref`` damping ratio ζ [-].
         solimp: (d0, d_max, width [m], midpoint, power) of the impedance.
         inverse_mass: Â, the foot's translational ``body_invweight0`` [1/kg].
+        corners: Each sole's (left, right) contact corners (x, y) in the sole's axes from
+            the centre of the spec's sole rectangle [m], (2, k, 2); None: that rectangle's
+            4 corners (the twin's box sole). An imported model's sole of several boxes
+            touches at all their corners (``robot_import.scene.ModelScene.floor``).
     """
 
     timeconst: float
     dampratio: float
     solimp: tuple[float, float, float, float, float]
     inverse_mass: float
+    corners: tuple | None = None
 
     @classmethod
     def of_scene(cls, model: mujoco.MjModel) -> SoftFloor:
@@ -160,30 +165,40 @@ def scene_corner_stiffness(model: mujoco.MjModel) -> float:
 
 
 def sole_equilibrium(
-    floor: SoftFloor, load, offset, *, length: float, width: float, iterations: int = 50
+    floor: SoftFloor,
+    load,
+    offset,
+    *,
+    length: float,
+    width: float,
+    corners=None,
+    iterations: int = 50,
 ) -> np.ndarray:
-    """(r₀ [m], θ_x [rad], θ_y [rad]) of soles at rest on their 4 corners, (n, 3) (module doc).
+    """(r₀ [m], θ_x [rad], θ_y [rad]) of soles at rest on their corners, (n, 3) (module doc).
 
     Args:
         load: Normal load F_n of each sole [N], (n,); ≤ 0: in the air, all zero.
-        offset: Its CoP from the corners' centroid, (x, y) in the sole's axes [m], (n, 2);
-            held a hair inside the sole.
+        offset: Its CoP from the centre of the sole rectangle, (x, y) in the sole's axes
+            [m], (n, 2); held a hair inside the rectangle.
         length, width: The sole's size l, w [m].
+        corners: The contact corners (x, y) from that centre [m], (k, 2); None: the
+            rectangle's 4 corners. r₀ is the penetration at the centre.
     """
     load = np.asarray(load, dtype=float)
     half = np.array([length, width]) / 2 * (1 - 1e-9)
     offset = np.clip(np.asarray(offset, dtype=float), -half, half)
-    x = np.array([1, 1, -1, -1]) * length / 2
-    y = np.array([1, -1, 1, -1]) * width / 2
-    moments = np.stack([np.ones(4), y, x])  # (3, 4): Σf, Σf y, Σf x of the corner forces
-    turns = np.stack([np.ones(4), -y, x], axis=1)  # (4, 3): ∂r_i / ∂(r₀, θ_x, θ_y)
+    if corners is None:
+        corners = np.column_stack([[1, 1, -1, -1], [1, -1, 1, -1]]) * half / (1 - 1e-9)
+    x, y = np.asarray(corners, dtype=float).T
+    moments = np.stack([np.ones(x.size), y, x])  # (3, k): Σf, Σf y, Σf x of the corner forces
+    turns = np.stack([np.ones(x.size), -y, x], axis=1)  # (k, 3): ∂r_i / ∂(r₀, θ_x, θ_y)
     target = load[:, None] * np.column_stack([np.ones_like(load), offset[:, 1], offset[:, 0]])
     loaded = load > 0
     k = floor.corner_force(2.5e-4)[0] / 2.5e-4  # a linear start, at a typical penetration
-    u = np.column_stack([load / 4, -target[:, 1] / width**2, target[:, 2] / length**2]) / k
+    u = np.linalg.solve(k * moments @ turns, target.T).T
     u[~loaded] = 0.0
     for _ in range(iterations):
-        force, slope = floor.corner_force(u @ turns.T)  # (n, 4) each
+        force, slope = floor.corner_force(u @ turns.T)  # (n, k) each
         residual = force @ moments.T - target
         if not np.any(np.abs(residual[loaded]) > 1e-12 * np.maximum(load[loaded, None], 1.0)):
             break
@@ -237,8 +252,9 @@ def foot_deflection(plan, floor: SoftFloor) -> tuple[np.ndarray, np.ndarray]:
     sink = np.zeros((plan.t.size, 2))
     for foot in (0, 1):
         r0, theta_x, theta_y = sole_equilibrium(
-            floor, load[:, foot], offset, length=spec.foot_length, width=spec.foot_width
-        ).T
+            floor, load[:, foot], offset, length=spec.foot_length, width=spec.foot_width,
+            corners=None if floor.corners is None else floor.corners[foot],
+        ).T  # fmt: skip
         turn[:, foot] = np.column_stack([theta_x, theta_y])
         # the sole point sits `ahead` behind the centroid and `beside` inward of it
         sink[:, foot] = r0 - theta_y * ahead + theta_x * beside[foot]

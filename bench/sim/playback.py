@@ -234,7 +234,7 @@ def play(
         noise_seed: Seed of that noise.
         scene: Where to play it: None the twin of ``plan.spec``; else an imported model's
             scene (``robot_import.scene.ModelScene``: ``build``, ``controls``,
-            ``initial_state``).
+            ``initial_state``, ``floor``: its soft floor, fed forward as the twin's).
     """
     return play_many(
         [plan],
@@ -291,7 +291,7 @@ def play_many(
         build = build_model if scene is None else scene.build
         model = build(first, friction=mu, actuators=mode, timestep=timestep)
         servo = servo_settings(first.spec, mode)
-        floor = SoftFloor.of_scene(model) if scene is None else None
+        floor = SoftFloor.of_scene(model) if scene is None else scene.floor(model)
         controls, aims = [], []
         for i in members:  # the members share a length, so one time base: the last one's
             times, q_ref, aim = commands_and_aim(plans[i], timestep, settle, hold, servo, floor)

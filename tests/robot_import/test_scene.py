@@ -48,3 +48,36 @@ def test_first_pose_stands_on_the_plane_and_joints_track_the_plan(name):
     # left is the loop's error under the model's kp and the floor's give (not fed forward)
     error = np.abs(s.q[standing] - plan.q_left_right[0]).max()
     assert error < np.deg2rad(3.0), f"{np.rad2deg(error):.2f} deg"
+
+
+def test_the_floor_feedforward_knows_every_corner_of_a_two_box_sole():
+    """``ModelScene.floor``'s sole corners are where MuJoCo puts the feet's contacts."""
+    path, map_path = MODELS["walker"]
+    robot_map = load_map(map_path)
+    fit = fit_model(path, robot_map)
+    spec = spec_from_dict(imported_spec(fit, robot_map)[0])
+    plan = plan_walk(spec, replace(GaitParams.nominal(spec, 1.0), steps=1))
+    scene = ModelScene(fit, spec)
+    model = scene.build(plan, friction=1.0, actuators="servo_ff", timestep=1e-3)
+    data = mujoco.MjData(model)
+    state = scene.initial_state(model, plan)
+    mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    data.ctrl[:] = scene.controls(model, plan.q_left_right[0])[0]
+    for _ in range(100):
+        mujoco.mj_step(model, data)
+    corners = np.array(scene.floor(model).corners)  # (2, 8, 2): two boxes of 4 corners
+    assert corners.shape == (2, 8, 2)
+    for foot, side in enumerate(("l", "r")):
+        site = model.site(f"{side}_sole")
+        R, p = data.site_xmat[site.id].reshape(3, 3), data.site_xpos[site.id]
+        centre = np.array([(spec.ankle_to_toe - spec.heel_offset) / 2, spec.sole_shift(foot)])
+        body = model.body(fit.model.body(fit.feet[("left", "right")[foot]]).name).id
+        touching = [
+            (data.contact[k].pos - p) @ R
+            for k in range(data.ncon)
+            if body in model.geom_bodyid[[data.contact[k].geom1, data.contact[k].geom2]]
+        ]
+        assert len(touching) >= 3
+        for point in touching:  # each contact sits on a predicted corner (the sole sinks < 2 mm)
+            gap = np.linalg.norm(corners[foot] - (point[:2] - centre), axis=1).min()
+            assert gap < 2e-3, f"{side}: contact {point[:2]} is {gap * 1e3:.1f} mm off every corner"

@@ -91,3 +91,22 @@ def test_the_sole_equilibrium_carries_the_load_at_its_cop(spec, floor):
     assert np.all(force[1] > 0) and np.count_nonzero(force[2]) < 4  # near a corner one lifts
     np.testing.assert_allclose(force[4, 2:], 0.0, atol=1e-6 * load[4])  # on the toe edge
     assert np.all(sole_equilibrium(floor, [0.0], [[0.01, 0.0]], length=length, width=width) == 0)
+
+
+def test_a_two_box_sole_balances_its_load_on_all_eight_corners(spec, floor):
+    """Given corners (an imported two-box sole: 8 corners, 4 of them on the seam), the
+    corner forces still carry the load at its CoP, and each corner's penetration is the
+    sole's rigid turn: Σ f_i = F_n, Σ f_i (x_i, y_i) = F_n p."""
+    length, width = 0.14, 0.07
+    x = np.array([-0.07, -0.01, -0.07, -0.01, -0.01, 0.07, -0.01, 0.07])
+    y = np.array([-1, -1, 1, 1, -1, -1, 1, 1]) * width / 2
+    offset = np.array([[0.0, 0.0], [0.02, -0.01], [-0.05, 0.03]])
+    load = np.array([20.0, 30.0, 10.0])
+    u = sole_equilibrium(floor, load, offset, length=length, width=width,
+                         corners=np.column_stack([x, y]))  # fmt: skip
+    force = floor.corner_force(u[:, :1] - u[:, 1:2] * y + u[:, 2:3] * x)[0]  # (3, 8)
+    np.testing.assert_allclose(force.sum(axis=1), load, rtol=1e-9)
+    np.testing.assert_allclose(force @ x, load * offset[:, 0], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(force @ y, load * offset[:, 1], rtol=1e-6, atol=1e-9)
+    four = sole_equilibrium(floor, load, offset, length=length, width=width)
+    assert np.all(np.abs(u[1:, 1]) < np.abs(four[1:, 1]))  # twice the corners across: less roll
