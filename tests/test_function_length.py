@@ -20,7 +20,7 @@ def long_functions(source: str, max_lines: int = MAX_LINES) -> list[tuple[str, i
     lines = source.splitlines()
     found = []
     for node in ast.walk(ast.parse(source)):
-        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
             continue
         first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
         length = node.end_lineno - first + 1
