@@ -364,6 +364,10 @@ def cause_class(r) -> str:
     * rocking past the tip angle in the prediction only: predicted tip, yet the robot
       walked, its loaded foot tilting by more than a fifth of the tip angle (measured,
       ``simulated_max_tilt_deg``): the support rocked in MuJoCo as predicted, less far;
+    * foot slide in the plan only: predicted ``foot_slide`` (the plan drags a loaded
+      rear foot in double support past the slip distance: a large lean's
+      hip width × (1/cos λ − 1)), yet the robot walked: no loaded foot of MuJoCo's slid
+      that far (its slip detection measures it), the drift went elsewhere;
     * unexplained: none of these.
     """
     walks = _walks(r["predicted_verdict"])
@@ -381,6 +385,8 @@ def cause_class(r) -> str:
         and r["simulated_max_tilt_deg"] > rocked
     ):
         return "rocking past the tip angle in the prediction only"
+    if r["predicted_verdict"] == "foot_slide" and _walks(r["simulated_verdict"]):
+        return "foot slide in the plan only"
     return "unexplained"
 
 

@@ -115,3 +115,12 @@ def test_held_out_tables_are_reported_apart_with_intervals_by_mode():
     assert "| dense | development | all | 1/2 50.0% [9.5%, 90.5%] |" in text
     assert "| random | held out | stiff | 10/10 100.0% [72.2%, 100.0%] |" in text
     assert text.index("# Held out") < text.index("## runs/random/sweep.csv")
+
+
+def test_a_planned_foot_slide_the_robot_walks_through_has_its_class():
+    from slopewalk.bench.report.fidelity import cause_class
+
+    slid = _row("stable", "foot_slide", "stable", simulated_max_tilt_deg=0.4)
+    assert cause_class(slid) == "foot slide in the plan only"
+    # a predicted tip on a sole that hardly turned (0.4°) is no foot slide, and unexplained
+    assert cause_class(slid | {"predicted_verdict": "tip"}) == "unexplained"
