@@ -125,6 +125,32 @@ def agreement(rows: list[dict], verdict: str = "predicted") -> tuple[int, int]:
     )
 
 
+def hedged(r) -> str:
+    """The predicted verdict, or ``uncertain`` where the predictor's own two models of the
+    walk the servos make disagree on whether it walks: the compliance-aware ZMP test
+    (the static fixed point's ZMP inside the polygon) and the events of the servo loop's
+    walk (``predicted_verdict``). No threshold: it says where the models part."""
+    if _walks(r["compliant_verdict"]) != _walks(r["predicted_verdict"]):
+        return "uncertain"
+    return r["predicted_verdict"]
+
+
+def hedged_agreement(rows: list[dict]) -> tuple[int, int, int]:
+    """(agreeing, decided, uncertain) of ``hedged`` over ``rows``, errors aside."""
+    rows = [r for r in rows if r["simulated_verdict"] != "error"]
+    sure = [r for r in rows if hedged(r) != "uncertain"]
+    ok = sum(_walks(r["predicted_verdict"]) == _walks(r["simulated_verdict"]) for r in sure)
+    return ok, len(sure), len(rows) - len(sure)
+
+
+def _hedged_cell(rows) -> str:
+    ok, sure, unsure = hedged_agreement(rows)
+    total = sure + unsure
+    if not total:
+        return "-"
+    return _share(ok, sure) + f"; uncertain {unsure}/{total} {unsure / total:.1%}"
+
+
 def _share(k: int, n: int) -> str:
     """``k/n share [low, high]`` with the Wilson interval, in percent."""
     if not n:
@@ -144,17 +170,20 @@ def summary_table(tables: dict, held_out: dict) -> list[str]:
         "## Agreement by set and actuator mode",
         "",
         "Agreement with the simulated verdict (walks or not), with its 95 % Wilson "
-        "interval; every mode, then all modes together.",
+        "interval; every mode, then all modes together. *hedged*: the predicted verdict "
+        "where the compliance-aware test agrees with it on walking, `uncertain` where the "
+        "two disagree; its agreement counts the trials it decides, and its share of "
+        "`uncertain` follows.",
         "",
-        "| set | role | mode | paper | compliant | predicted |",
-        "|---|---|---|---|---|---|",
+        "| set | role | mode | paper | compliant | predicted | hedged |",
+        "|---|---|---|---|---|---|---|",
     ]
     for role, group in (("development", tables), ("held out", held_out)):
         for name, rows in group.items():
             modes = sorted({r["actuators"] for r in rows})
             for mode in [*modes, "all"] if len(modes) > 1 else modes:
                 sub = rows if mode == "all" else [r for r in rows if r["actuators"] == mode]
-                cells = [_share(*agreement(sub, v)) for v in VERDICTS]
+                cells = [_share(*agreement(sub, v)) for v in VERDICTS] + [_hedged_cell(sub)]
                 lines.append(f"| {set_name(name)} | {role} | {mode} | " + " | ".join(cells) + " |")
     return lines + [""]
 

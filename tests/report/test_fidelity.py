@@ -112,6 +112,8 @@ def test_held_out_tables_are_reported_apart_with_intervals_by_mode():
                  sway_share=0.0)] * 10  # fmt: skip
     text = fidelity_report({"runs/dense/sweep.csv": dev}, held_out={"runs/random/sweep.csv": held})
     assert "| dense | development | servo | 0/1 0.0% [0.0%, 79.3%] |" in text
+    # hedged: both rows' models agree (stable, stable): decided, 1 of 2 right, none uncertain
+    assert "| 1/2 50.0% [9.5%, 90.5%]; uncertain 0/2 0.0% |" in text
     assert "| dense | development | all | 1/2 50.0% [9.5%, 90.5%] |" in text
     assert "| random | held out | stiff | 10/10 100.0% [72.2%, 100.0%] |" in text
     assert text.index("# Held out") < text.index("## runs/random/sweep.csv")
@@ -124,3 +126,16 @@ def test_a_planned_foot_slide_the_robot_walks_through_has_its_class():
     assert cause_class(slid) == "foot slide in the plan only"
     # a predicted tip on a sole that hardly turned (0.4°) is no foot slide, and unexplained
     assert cause_class(slid | {"predicted_verdict": "tip"}) == "unexplained"
+
+
+def test_the_hedged_verdict_is_uncertain_where_the_two_models_disagree():
+    from slopewalk.bench.report.fidelity import hedged, hedged_agreement
+
+    rows = [
+        _row("stable", "stable", "stable"),  # both say walks: decided, right
+        _row("stable", "tip", "stable") | {"compliant_verdict": "stable"},  # models part
+        _row("zmp_outside", "tip", "stable"),  # both say falls: decided, wrong
+        _row("zmp_outside", "stable", "fall"),  # compliant zmp_outside, predicted stable
+    ]
+    assert [hedged(r) for r in rows] == ["stable", "uncertain", "tip", "uncertain"]
+    assert hedged_agreement(rows) == (1, 2, 2)
