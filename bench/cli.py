@@ -399,10 +399,19 @@ def _fidelity_parser(sub) -> None:
         "Read sweep tables (DIR/sweep.csv of `slopewalk sweep`) and write a markdown report: "
         "how often the paper's verdict, the compliance-aware one and the predicted one (the "
         "most severe predicted event) agree with the simulated verdict, both confusion "
-        "tables, and every disagreement of the predicted verdict with its measured causes.",
+        "tables, and every disagreement of the predicted verdict with its measured causes; "
+        "per set and actuator mode with a 95% Wilson interval. Tables given with --held-out "
+        "(gaits or robots the predictor was never designed on) are reported apart.",
         "slopewalk fidelity runs/paper/sweep.csv runs/dense/sweep.csv --out results/fidelity.md",
+        "slopewalk fidelity runs/dense/sweep.csv --held-out runs/random/sweep.csv --out f.md",
     )
-    p.add_argument("tables", nargs="+", metavar="TABLE", help="sweep.csv files")
+    p.add_argument("tables", nargs="+", metavar="TABLE", help="development sweep.csv files")
+    p.add_argument(
+        "--held-out",
+        action="append",
+        metavar="TABLE",
+        help="a held-out sweep.csv (repeatable), reported apart from the development tables",
+    )
     p.add_argument("--out", required=True, metavar="FILE", help="markdown report")
     p.set_defaults(run=commands.fidelity)
 

@@ -342,8 +342,16 @@ def fidelity(args: argparse.Namespace) -> None:
     from slopewalk.bench.report.fidelity import fidelity_report, read_tables
 
     check_output(args.out)
-    command = "slopewalk fidelity " + " ".join(args.tables) + f" --out {args.out}"
-    text = fidelity_report(read_tables(args.tables), command=command)
+    held_out = args.held_out or []
+    command = (
+        "slopewalk fidelity "
+        + " ".join(args.tables)
+        + "".join(f" --held-out {t}" for t in held_out)
+        + f" --out {args.out}"
+    )
+    text = fidelity_report(
+        read_tables(args.tables), command=command, held_out=read_tables(held_out)
+    )
     with atomic_paths(args.out) as (tmp,):
         tmp.write_text(text)
     print(f"wrote {args.out}")

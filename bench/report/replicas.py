@@ -21,8 +21,11 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-# the inputs that make a trial, seed and noise aside (a sweep table's columns)
+# the inputs that make a trial, seed and noise aside (a sweep table's columns), and those
+# of a drawn or given gait (``tables.sweep.GAIT_COLUMNS``), in the tables that have them
 TRIAL_INPUTS = ("step_time", "slope_deg", "friction", "actuators", "robot", "mass_scale")
+GAIT_INPUTS = ("gait", "hip_height_m", "swing_lift_m", "tilt_deg", "pelvis_offset_m",
+               "step_length_m", "sway_share")  # fmt: skip
 
 
 def seeds_of(rows: list[dict]) -> list:
@@ -39,8 +42,9 @@ def _agrees(r, column: str) -> bool:
 
 
 def trial_key(r) -> tuple:
-    """The inputs that make ``r``'s trial, seed and noise aside (``TRIAL_INPUTS``)."""
-    return tuple(r.get(c) for c in TRIAL_INPUTS)
+    """The inputs that make ``r``'s trial, seed and noise aside (``TRIAL_INPUTS``, and
+    ``GAIT_INPUTS`` where the row has them)."""
+    return tuple(r.get(c) for c in TRIAL_INPUTS) + tuple(r[c] for c in GAIT_INPUTS if c in r)
 
 
 def flipping(rows: list[dict]) -> dict[tuple, list[dict]]:

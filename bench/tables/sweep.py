@@ -16,8 +16,9 @@ and its plan), its unit scale and its decimals; ``COLUMNS``, ``DECIMALS`` and
 ``outcome_columns`` (a trial's row) derive from it. A new column is one ``Column`` here
 (and, as ever, the previous layout added to ``PREVIOUS_LAYOUTS``).
 
-``SWEEP``, ``SWEEP_CONTROLLER`` and ``SWEEP_NOISE`` are the sweep's ``TableFormat``s
-(without, with a controller column, with a command-noise column); the module-level
+``SWEEP``, ``SWEEP_CONTROLLER``, ``SWEEP_NOISE`` and ``SWEEP_GAIT`` are the sweep's
+``TableFormat``s (without, with a controller column, with a command-noise column, with
+the gait's columns of a sweep of drawn or given gaits); the module-level
 functions below are their methods. A finished table of an older version
 (``PREVIOUS_LAYOUTS``: its columns had a ``wall_s``, or lacked the fidelity columns or
 the simulated tilt) is replaced by a fresh run (``--resume`` refuses it).
@@ -139,6 +140,13 @@ CONTROLLER_COLUMNS = (*COLUMNS, "controller")
 CONTROLLER_HEADER = (",".join(CONTROLLER_COLUMNS) + "\n").encode()
 # A sweep with command noise: its σ [deg], as written in the sweep file, last likewise
 NOISE_COLUMNS = (*COLUMNS, "command_noise_deg")
+# A sweep of drawn or given gaits ([draw], envelope): the gait's source and parameters
+# (``SweepTrial.gait_inputs``), last likewise
+GAIT_COLUMNS = ("gait", "hip_height_m", "swing_lift_m", "tilt_deg", "pelvis_offset_m",
+                "step_length_m", "sway_share")  # fmt: skip
+GAIT_TABLE_COLUMNS = (*COLUMNS, *GAIT_COLUMNS)
+GAIT_DECIMALS = {"hip_height_m": 7, "swing_lift_m": 7, "tilt_deg": 5, "pelvis_offset_m": 7,
+                 "step_length_m": 7, "sway_share": 7}  # fmt: skip
 _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the older versions'
 # before fixed precision: a wall time, and no fidelity columns
 PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
@@ -161,6 +169,7 @@ _LAYOUTS = {
     COLUMNS: "a sweep without a controller or command_noise key",
     CONTROLLER_COLUMNS: "a sweep with a controller key",
     NOISE_COLUMNS: "a sweep with a command_noise key",
+    GAIT_TABLE_COLUMNS: "a sweep with a draw or envelope key",
 }
 
 
@@ -170,18 +179,20 @@ def _sweep_layout(columns: tuple[str, ...]) -> TableFormat:
         for other, what in _LAYOUTS.items()
         if other != columns
     )
-    return TableFormat("sweep", columns, DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS, others)
+    decimals = DECIMALS | GAIT_DECIMALS if columns == GAIT_TABLE_COLUMNS else DECIMALS
+    return TableFormat("sweep", columns, decimals, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS, others)
 
 
 SWEEP = _sweep_layout(COLUMNS)
 SWEEP_CONTROLLER = _sweep_layout(CONTROLLER_COLUMNS)
 SWEEP_NOISE = _sweep_layout(NOISE_COLUMNS)
+SWEEP_GAIT = _sweep_layout(GAIT_TABLE_COLUMNS)
 
 
 def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
     """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS``, ``CONTROLLER_COLUMNS`` or
     ``NOISE_COLUMNS``)."""
-    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE):
+    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE, SWEEP_GAIT):
         if tuple(columns) == fmt.columns:
             return fmt
     return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)

@@ -93,3 +93,49 @@ def test_cli_refuses_a_missing_table_in_one_line(tmp_path):
     assert run.returncode == 2
     assert run.stderr.strip().count("\n") == 0 and "no such file" in run.stderr
     assert not out.exists()
+
+
+def test_the_wilson_interval_matches_the_hand_worked_one():
+    """0/10 and 10/10: (z²/2n ± z²/2n) / (1 + z²/n) with z = 1.96, i.e. [0, 0.2775] and
+    [0.7225, 1]; 5/10: 0.5 ± 1.96 sqrt(0.25/10 + 3.8415/400) / 1.38415 = [0.2366, 0.7634]."""
+    from slopewalk.bench.report.fidelity import wilson
+
+    assert wilson(0, 10) == pytest.approx((0.0, 0.27753), abs=1e-5)
+    assert wilson(10, 10) == pytest.approx((0.72247, 1.0), abs=1e-5)
+    assert wilson(5, 10) == pytest.approx((0.23659, 0.76341), abs=1e-5)
+
+
+def test_held_out_tables_are_reported_apart_with_intervals_by_mode():
+    dev = [_row("stable", "stable", "stable"), _row("stable", "stable", "fall", actuators="servo")]
+    held = [_row("zmp_outside", "tip", "fall", gait="paper draw 0", hip_height_m=0.18,
+                 swing_lift_m=0.005, tilt_deg=10.0, pelvis_offset_m=0.0, step_length_m=0.111,
+                 sway_share=0.0)] * 10  # fmt: skip
+    text = fidelity_report({"runs/dense/sweep.csv": dev}, held_out={"runs/random/sweep.csv": held})
+    assert "| dense | development | servo | 0/1 0.0% [0.0%, 79.3%] |" in text
+    # hedged: both rows' models agree (stable, stable): decided, 1 of 2 right, none uncertain
+    assert "| 1/2 50.0% [9.5%, 90.5%]; uncertain 0/2 0.0% |" in text
+    assert "| dense | development | all | 1/2 50.0% [9.5%, 90.5%] |" in text
+    assert "| random | held out | stiff | 10/10 100.0% [72.2%, 100.0%] |" in text
+    assert text.index("# Held out") < text.index("## runs/random/sweep.csv")
+
+
+def test_a_planned_foot_slide_the_robot_walks_through_has_its_class():
+    from slopewalk.bench.report.fidelity import cause_class
+
+    slid = _row("stable", "foot_slide", "stable", simulated_max_tilt_deg=0.4)
+    assert cause_class(slid) == "foot slide in the plan only"
+    # a predicted tip on a sole that hardly turned (0.4°) is no foot slide, and unexplained
+    assert cause_class(slid | {"predicted_verdict": "tip"}) == "unexplained"
+
+
+def test_the_hedged_verdict_is_uncertain_where_the_two_models_disagree():
+    from slopewalk.bench.report.fidelity import hedged, hedged_agreement
+
+    rows = [
+        _row("stable", "stable", "stable"),  # both say walks: decided, right
+        _row("stable", "tip", "stable") | {"compliant_verdict": "stable"},  # models part
+        _row("zmp_outside", "tip", "stable"),  # both say falls: decided, wrong
+        _row("zmp_outside", "stable", "fall"),  # compliant zmp_outside, predicted stable
+    ]
+    assert [hedged(r) for r in rows] == ["stable", "uncertain", "tip", "uncertain"]
+    assert hedged_agreement(rows) == (1, 2, 2)

@@ -21,6 +21,23 @@ Format (degrees at this edge, like the CLI)::
     step_time = 0.4
     friction = 0.4
 
+    [draw]             # optional: random gaits instead of the nominal one (held-out fidelity)
+    family = ["paper", "extended"]   # gait families of planner.gait_search.FAMILIES
+    gaits = 2          # gaits drawn per cell (step time x slope x mu x robot) and family, >= 1
+    seed = 7           # the draw's seed, >= 0
+
+    envelope = ["../../../results/envelope/envelope.csv"]   # optional, relative to this file
+
+``[draw]`` replaces every trial's nominal gait by ``gaits`` gaits per family, each drawn
+uniformly from the family's search box (``gait_search.gait_bounds`` of the trial's
+robot, step time and slope), seeded by the draw's seed, the family, the gait's number
+and the cell (step time, slope, μ, robot), so the same gait is played in every actuator
+mode of the cell. ``envelope`` lists envelope tables (``slopewalk envelope``): every gait
+of their rows that the envelope played (both objectives), at its cell's step time,
+slope and μ, is a trial in every ``actuators`` mode of the ``[grid]`` (whose other keys
+must be left out). Either makes the table's ``gait`` columns
+(``tables.sweep.GAIT_COLUMNS``); neither goes with a controller or command noise.
+
 ``[[grid]]`` may also be an array of tables; the sweep is the union of their
 products and the ``[[trial]]`` entries, de-duplicated by ``trial_id`` (first
 occurrence kept, in file order).
@@ -55,12 +72,15 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
+import numpy as np
+
 from slopewalk.bench.actuators import DEFAULT_MODE, actuator_mode
 from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
     AXES,
     TIMESTEP,
     Body,
     Box,
+    GaitChoice,
     SweepTrial,
     TrialSet,
     spec_text,
@@ -72,7 +92,8 @@ from slopewalk.planner.spec import LINK_NAMES, RobotSpec, load_spec
 
 SWEEPS_DIR = Path(__file__).parents[1] / "sweeps"  # bench/experiments/sweeps/
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
-TOP_KEYS = ("description", "steps", "seed", "command_noise", "grid", "trial")
+TOP_KEYS = ("description", "steps", "seed", "command_noise", "draw", "envelope", "grid", "trial")
+DRAW_KEYS = ("family", "gaits", "seed")
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
     "step_time": 1.0,
@@ -113,6 +134,12 @@ class SweepConfig:
     def noisy(self) -> bool:
         """The commands get noise (its table has a ``command_noise_deg`` column)."""
         return self.command_noise_deg > 0
+
+    @property
+    def other_gaits(self) -> bool:
+        """Some trial walks a drawn or given gait (its table has ``GAIT_COLUMNS``)."""
+        k = AXES.index("gait")
+        return any(value is not None for box in self.boxes for _, value in box.values[k])
 
     @property
     def closed_loop(self) -> bool:
@@ -158,6 +185,13 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
         raise SweepError(f"{source}: description = {description!r}: must be a string")
     grids = _tables(data, "grid", source)
     singles = _tables(data, "trial", source)
+    gaits = _draws(data.get("draw"), source)
+    if "envelope" in data:
+        return _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, description)
+    if gaits != (None,) and (noise or singles):
+        raise SweepError(
+            f"{source}: [draw] goes with a [grid] alone (no command_noise, no [[trial]])"
+        )
     if not grids and not singles:
         raise SweepError(f"{source}: no trials: give a [grid] table or [[trial]] entries")
     robots: dict[str, RobotSpec] = {}
@@ -174,7 +208,7 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
             if not isinstance(values, list) or not values:
                 raise SweepError(f"{source}: {where}.{key} = {values!r}: must be a non-empty list")
             axes[key] = values
-        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}"))
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}", gaits))
     for where, table in singles:
         _known(table, TRIAL_KEYS, f"{where}.", source)
         axes = {key: [table.get(key, DEFAULTS[key])] for key in TRIAL_KEYS}
@@ -194,7 +228,103 @@ def _seeds(value, source: str) -> tuple[int, ...]:
     return tuple(values)
 
 
-def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) -> Box:
+def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, description):
+    """The sweep of every gait the envelope tables of ``data["envelope"]`` played, in each
+    ``actuators`` mode of the one ``[grid]`` (module doc)."""
+    paths = data["envelope"]
+    if not isinstance(paths, list) or not paths or not all(isinstance(p, str) for p in paths):
+        raise SweepError(f"{source}: envelope = {paths!r}: must be a non-empty list of paths")
+    extra = [k for k in ("draw", "command_noise") if k in data]
+    if singles or len(grids) != 1 or extra or set(grids[0][1]) - {"actuators"}:
+        raise SweepError(
+            f"{source}: envelope goes with one [grid] of actuators alone (no other grid key, "
+            "[[trial]], draw or command_noise)"
+        )
+    modes = grids[0][1].get("actuators", [DEFAULTS["actuators"]])
+    robots: dict[str, RobotSpec] = {}
+    boxes = []
+    for path in paths:
+        for k, (cell, gait) in enumerate(_envelope_gaits(base_dir / path, source)):
+            axes = cell | {"actuators": modes}
+            axes |= {"mass_scale": [{}], "controller": [OPEN_LOOP]}
+            where = f"{source}: {path} gait {k}"
+            boxes.append(_box(axes, steps, seeds, 0.0, robots, base_dir, where, (gait,)))
+    return SweepConfig(source, steps, seeds, tuple(boxes), description, 0.0)
+
+
+def _envelope_gaits(path: Path, source: str):
+    """(cell axes, ``GaitChoice``) of every gait an envelope table's rows played."""
+    from slopewalk.bench.actuators import MODES
+    from slopewalk.bench.tables.envelope import EXTENDED_COLUMNS, GAITS, sim_columns
+    from slopewalk.bench.tables.table import read_table
+    from slopewalk.planner.gait_search import tilt_bounds
+
+    if not path.is_file():
+        raise SweepError(f"{source}: envelope table {str(path)!r}: no such file")
+    try:
+        rows = read_table(path)
+    except (OSError, SlopewalkError) as err:
+        raise SweepError(f"{source}: envelope table {str(path)!r}: {err}") from None
+    limit = tilt_bounds(load_spec())[1]
+    for row in rows:
+        if row["robot"] != "default":
+            raise SweepError(
+                f"{source}: {path}: cell {row['cell_id']} is of robot {row['robot']!r}: "
+                "only envelopes of the default robot are played"
+            )
+        for gait in GAITS:
+            if not any(row[sim_columns(gait, m)[0]] for m in MODES):
+                continue  # not played (nothing found)
+            values = (
+                ("hip_height", row[f"{gait}_hip_height_m"]),
+                ("swing_lift", row[f"{gait}_swing_lift_m"]),
+                ("tilt", _tilt(row[f"{gait}_tilt_deg"], limit)),
+                *((e.removesuffix("_m"), row[f"{gait}_{e}"]) for e in EXTENDED_COLUMNS),
+            )
+            cell = {"step_time": [row["step_time"]], "slope": [row["slope_deg"]],
+                    "friction": [row["friction"]], "robot": ["default"]}  # fmt: skip
+            yield cell, GaitChoice(f"{path.name} {row['family']} {gait}", values=values)
+
+
+TILT_DIGITS = 1e-5  # [deg] the envelope table's precision of a tilt (tables/envelope.py)
+
+
+def _tilt(degrees: float, limit: float) -> float:
+    """A table's tilt [deg] in radians; one the table's rounding put past the ankle roll's
+    ``limit`` [rad] (a GA gait at its bound, 34.37747° for 0.6 rad) back on it."""
+    tilt = float(np.deg2rad(degrees))
+    if limit < abs(tilt) <= limit + np.deg2rad(TILT_DIGITS):
+        return float(np.copysign(limit, tilt))
+    return tilt
+
+
+def _draws(value, source: str) -> tuple[GaitChoice | None, ...]:
+    """The gaits of a ``[draw]`` table (module doc); (None,): the nominal gait."""
+    from slopewalk.planner.gait_search import FAMILIES
+
+    if value is None:
+        return (None,)
+    if not isinstance(value, dict):
+        raise SweepError(f"{source}: draw must be a table [draw]")
+    _known(value, DRAW_KEYS, "draw.", source)
+    families = value.get("family", ["paper"])
+    if not isinstance(families, list) or not families or any(f not in FAMILIES for f in families):
+        raise SweepError(
+            f"{source}: draw.family = {families!r}: must be a non-empty list of "
+            f"{', '.join(FAMILIES)}"
+        )
+    count, seed = value.get("gaits", 1), value.get("seed", 0)
+    for key, number, low in (("gaits", count, 1), ("seed", seed, 0)):
+        if isinstance(number, bool) or not isinstance(number, int) or number < low:
+            raise SweepError(f"{source}: draw.{key} = {number!r}: must be an integer >= {low}")
+    return tuple(
+        GaitChoice(f"{family} draw {i}", family, i, seed)
+        for family in dict.fromkeys(families)
+        for i in range(count)
+    )
+
+
+def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, gaits=(None,)) -> Box:
     """Check each value of each axis once; the grid as a ``Box``."""
     step_times = [_positive(v, "step_time", "s", where) for v in axes["step_time"]]
     slopes = []
@@ -212,6 +342,8 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) ->
         for scale in axes["mass_scale"]
     ]
     controllers = [_controller(v, where) for v in axes["controller"]]
+    if gaits != (None,) and any(c is not None for c in controllers):
+        raise SweepError(f"{where}: [draw] with a controller: drawn gaits are played open loop")
     if noise and any(c is not None for c in controllers):
         raise SweepError(
             f"{where}: command_noise = {noise:g} deg with a controller: the noise is for "
@@ -224,6 +356,7 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where) ->
         _unique((a, a) for a in axes["actuators"]),
         _unique((b.spec_json, b) for b in bodies),
         _unique((c or OPEN_LOOP, c) for c in controllers),
+        _unique(("nominal" if g is None else g.key, g) for g in gaits),
         tuple((repr(seed), seed) for seed in seeds),
     )
     box = Box(where, values)

@@ -50,6 +50,7 @@ from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepTrial
 from slopewalk.bench.tables.sweep import (
     SWEEP,
     SWEEP_CONTROLLER,
+    SWEEP_GAIT,
     SWEEP_NOISE,
     outcome_columns,
 )
@@ -226,12 +227,12 @@ def run_sweep(
         return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
     result = run_batch(
-        replace(  # a controller or command noise adds a column (tables/sweep.py)
+        replace(  # a controller, command noise or other gaits add columns (tables/sweep.py)
             SWEEP_BATCH,
             source=config.source,
             fmt=SWEEP_CONTROLLER
             if config.closed_loop
-            else (SWEEP_NOISE if config.noisy else SWEEP),
+            else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP)),
         ),
         config.trials,
         total,

@@ -22,11 +22,74 @@ import numpy as np
 from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
 from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.spec import RobotSpec
 
 TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk
+
+
+DRAW_BATCH = 64  # gaits drawn at once, the first admissible one taken
+DRAW_ROUNDS = 16  # batches tried before a cell is refused
+GAIT_FIELDS = ("hip_height", "swing_lift", "tilt", "pelvis_offset", "step_length", "sway_share")
+
+
+@dataclass(frozen=True)
+class GaitChoice:
+    """Which gait a trial walks instead of its robot's nominal one.
+
+    Either drawn (``family`` set): the ``index``-th gait drawn uniformly from the
+    admissible part of the family's search box (``gait_search.GaitProblem`` of the trial's
+    robot, step time and slope: reachable, every pitch joint within its limits, as the GA
+    admits them; the first admissible one of batches of ``DRAW_BATCH`` uniform draws), by
+    a generator seeded with ``draw_seed``, the gait's number and the trial's cell; or
+    given (``values`` set): (field, value) pairs of ``GAIT_FIELDS`` in SI units and
+    radians, e.g. an envelope's GA gait, ``source`` saying whose.
+
+    Attributes:
+        source: What the gait is, for the table's ``gait`` column ("paper draw 3",
+            "envelope.csv maxmargin").
+        family: "paper" or "extended" for a drawn gait, else "".
+        index: The draw's number within its cell and family.
+        draw_seed: The sweep's draw seed.
+        values: The given gait's (field, value) pairs, else ().
+    """
+
+    source: str
+    family: str = ""
+    index: int = 0
+    draw_seed: int = 0
+    values: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def key(self) -> str:
+        """The text that identifies this choice in a ``trial_id``."""
+        if self.family:
+            return f"draw:{self.family}:{self.draw_seed}:{self.index}"
+        return json.dumps(dict(self.values), sort_keys=True, default=float)
+
+    def overrides(self, spec: RobotSpec, step_time: float, slope: float, cell: str) -> dict:
+        """``GaitParams`` fields of this gait for a trial of ``spec`` at ``step_time`` [s] on
+        ``slope`` [rad]; ``cell``: the text that seeds a draw with the trial's cell."""
+        if not self.family:
+            return dict(self.values)
+        from slopewalk.planner.gait_search import FAMILIES, GaitProblem, ga_params
+
+        problem = GaitProblem(spec, ga_params(spec, step_time, slope), family=self.family)
+        bounds = problem.bounds
+        text = f"{self.key}|{cell}".encode()
+        rng = np.random.default_rng(int(hashlib.sha256(text).hexdigest()[:16], 16))
+        for _ in range(DRAW_ROUNDS):
+            x = bounds.xl + rng.random((DRAW_BATCH, bounds.xl.size)) * (bounds.xu - bounds.xl)
+            ok = np.flatnonzero(problem.measure(x).admissible)
+            if ok.size:
+                return {n: float(v) for n, v in zip(FAMILIES[self.family], x[ok[0]], strict=True)}
+        raise SlopewalkError(
+            f"{self.source}: none of {DRAW_ROUNDS * DRAW_BATCH} gaits drawn from the "
+            f"{self.family} family's box is admissible at {step_time:g} s on "
+            f"{np.rad2deg(slope):g} deg (every one out of reach or past a joint limit)"
+        )
 
 
 def spec_text(spec: RobotSpec) -> str:
@@ -51,6 +114,7 @@ class SweepTrial:
         controller: ``MODULE:CALLABLE`` of a closed-loop controller, or None (open loop).
         command_noise_deg: σ of the noise on every command row [deg], as written in the
             sweep file; 0: none.
+        gait_choice: The gait walked instead of the nominal one (drawn or given), or None.
     """
 
     step_time: float
@@ -65,6 +129,7 @@ class SweepTrial:
     spec_json: str = field(default="", repr=False, compare=False)  # spec_text(spec), if known
     controller: str | None = None
     command_noise_deg: float = 0.0
+    gait_choice: GaitChoice | None = None
 
     @cached_property
     def trial_id(self) -> str:
@@ -88,6 +153,8 @@ class SweepTrial:
             key["controller"] = self.controller
         if self.command_noise_deg:  # likewise: ids without noise stay what they were
             key["command_noise_deg"] = self.command_noise_deg
+        if self.gait_choice is not None:  # likewise: nominal gaits keep their ids
+            key["gait"] = self.gait_choice.key
         text = json.dumps(key, sort_keys=True, default=float)
         text = text.replace('"\\u0000"', self.spec_json or spec_text(self.spec), 1)
         return hashlib.sha256(text.encode()).hexdigest()[:12]
@@ -111,12 +178,29 @@ class SweepTrial:
             text += f" controller {self.controller.rpartition(':')[2]}"
         if self.command_noise_deg:
             text += f" noise {self.command_noise_deg:g} deg seed {self.seed}"
+        if self.gait_choice is not None:
+            text += f" gait {self.gait_choice.source}"
         return text
 
+    @cached_property
+    def _overrides(self) -> dict:
+        """The gait's fields beside the nominal ones (``gait_choice``); {} for the nominal gait."""
+        if self.gait_choice is None:
+            return {}
+        cell = json.dumps(
+            [self.step_time, self.slope_deg, self.friction, self.spec_json or spec_text(self.spec)]
+        )
+        slope = float(np.deg2rad(self.slope_deg))
+        return self.gait_choice.overrides(self.spec, self.step_time, slope, cell)
+
     def gait(self) -> GaitParams:
-        """The nominal gait of this trial (radians from here on)."""
+        """The gait of this trial: the nominal one, or ``gait_choice``'s (radians from here on)."""
         return GaitParams.nominal(
-            self.spec, self.step_time, slope=float(np.deg2rad(self.slope_deg)), steps=self.steps
+            self.spec,
+            self.step_time,
+            slope=float(np.deg2rad(self.slope_deg)),
+            steps=self.steps,
+            **self._overrides,
         )
 
     def trial_spec(self) -> TrialSpec:
@@ -144,6 +228,25 @@ class SweepTrial:
             "seed": self.seed,
             "controller": self.controller or "none",  # written only by closed-loop sweeps
             "command_noise_deg": self.command_noise_deg,  # written only by noisy sweeps
+        } | self.gait_inputs()
+
+    def gait_inputs(self) -> dict:
+        """The gait's columns (written only by sweeps of drawn or given gaits): its source and
+        every ``GAIT_FIELDS`` value of the gait walked (tilt in degrees)."""
+        if self.gait_choice is None:
+            return {"gait": "nominal"}
+        try:
+            params = self.gait()
+        except SlopewalkError:  # an error row's inputs: its message says why
+            return {"gait": self.gait_choice.source}
+        return {
+            "gait": self.gait_choice.source,
+            "hip_height_m": params.hip_height,
+            "swing_lift_m": params.swing_lift,
+            "tilt_deg": float(np.rad2deg(params.tilt)),
+            "pelvis_offset_m": params.pelvis_offset,
+            "step_length_m": params.step_length,
+            "sway_share": params.lean_share,
         }
 
 
@@ -157,7 +260,7 @@ class Body:
     spec_json: str = field(repr=False)  # its part of the trial_id text
 
 
-AXES = ("step_time", "slope", "friction", "actuators", "body", "controller", "seed")
+AXES = ("step_time", "slope", "friction", "actuators", "body", "controller", "gait", "seed")
 
 
 @dataclass(frozen=True)
@@ -245,7 +348,7 @@ class TrialSet(Sequence):
 
     def make(self, values: list) -> SweepTrial:
         """The trial of one value per axis (``AXES`` order)."""
-        step_time, slope, friction, actuators, body, controller, seed = values
+        step_time, slope, friction, actuators, body, controller, gait, seed = values
         return SweepTrial(
             step_time,
             slope,
@@ -259,6 +362,7 @@ class TrialSet(Sequence):
             body.spec_json,
             controller,
             self._noise,
+            gait,
         )
 
     def simulated_steps(self) -> float:
