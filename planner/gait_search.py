@@ -86,6 +86,7 @@ PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
 SAMPLES_PER_STEP = 100  # GA grid: dt = step_time / 100, plus phase-change limits and refinement
 INADMISSIBLE_GAP = 1.0  # constraint value [m or rad] given to an unreachable individual
 _TILT_GRID = 61  # tilts tried when a bound is the best over all tilts
+_UNMEASURED = np.zeros(0)  # a ``Measurement`` gap not given: 0 for every individual
 
 
 @dataclass(frozen=True)
@@ -127,20 +128,20 @@ class Measurement:
         joint_gap: Worst excursion of a pitch joint past its search limit [rad]
             (``joint_gap``, ``search_limits``); ≤ 0 when admissible, inf where unreachable.
         friction_gap: Largest friction ratio |F_t|/F_n less the floor's μ [-]; ≤ 0 when
-            the plane holds the walk. None: not measured (0).
+            the plane holds the walk. Not given: not measured (0).
         slide_gap: Largest planned slide of a loaded foot in double support less
-            ``SLIP_DISTANCE`` [m]; ≤ 0 when no foot slides. None: not measured (0).
+            ``SLIP_DISTANCE`` [m]; ≤ 0 when no foot slides. Not given: not measured (0).
     """
 
     work: np.ndarray
     margin: np.ndarray
     joint_gap: np.ndarray
-    friction_gap: np.ndarray | None = None
-    slide_gap: np.ndarray | None = None
+    friction_gap: np.ndarray = _UNMEASURED
+    slide_gap: np.ndarray = _UNMEASURED
 
     def __post_init__(self) -> None:
         for name in ("friction_gap", "slide_gap"):
-            if getattr(self, name) is None:
+            if getattr(self, name) is _UNMEASURED:
                 object.__setattr__(self, name, np.zeros(np.shape(self.work)))
 
     @property
