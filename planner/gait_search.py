@@ -63,7 +63,7 @@ min/max over the samples of one walk and over a grid of tilts.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -136,8 +136,8 @@ class Measurement:
     work: np.ndarray
     margin: np.ndarray
     joint_gap: np.ndarray
-    friction_gap: np.ndarray = _UNMEASURED
-    slide_gap: np.ndarray = _UNMEASURED
+    friction_gap: np.ndarray = field(default_factory=lambda: _UNMEASURED)
+    slide_gap: np.ndarray = field(default_factory=lambda: _UNMEASURED)
 
     def __post_init__(self) -> None:
         for name in ("friction_gap", "slide_gap"):
