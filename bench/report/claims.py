@@ -453,7 +453,8 @@ def _describe(report: dict) -> str:
     b = report["best"]
     return (
         f"{'feasible' if report['feasible'] else 'INFEASIBLE'}: Hz {b['hip_height_m']:.3f}"
-        f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {b['tilt_deg']:.2f}°, work "
+        f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {-b['tilt_deg']:.2f}° (lean "
+        f"{b['tilt_deg']:.2f}°), work "
         f"{b['work_J']:.3f} J, min margin {b['min_margin_m'] * 1e3:.1f} mm"
         + _fine_check(report)
         + f" [{_constraint(report)} constraint]"

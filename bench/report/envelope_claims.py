@@ -212,7 +212,7 @@ def envelope_cell_note(rows, slope_deg: float, cite: str) -> str:
     return (
         f"; envelope cell {_cell(cell)} ({cite}): {verdict}, largest margin "
         f"{cell['maxmargin_margin_mm']:.1f} mm (Hz {cell['maxmargin_hip_height_m']:.3f} m, "
-        f"Szmax {cell['maxmargin_swing_lift_m']:.3f} m, θ1max {cell['maxmargin_tilt_deg']:.2f}°"
+        f"Szmax {cell['maxmargin_swing_lift_m']:.3f} m, θ1max {-cell['maxmargin_tilt_deg']:.2f}°"
         f"), {minwork}; MuJoCo: {_sim_text(cell, modes)}"
     )
 

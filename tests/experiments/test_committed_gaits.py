@@ -71,6 +71,7 @@ def _dense_margin(spec, params) -> float:
     return float(margin[0])
 
 
+@pytest.mark.slow  # about 400 gaits re-planned twice: .ci/run runs it
 @pytest.mark.parametrize("path", ENVELOPES)
 def test_every_stored_envelope_gait_replans_to_its_margin(spec, path):
     off = []
