@@ -755,7 +755,17 @@ def _robot_claims(out: Path, rows, spec, trials, suffix: str, ga_rows, envelope)
                 c["analytic"] += note
                 c["evidence"] += f", {cite}"
     line = _line(rows, step_time=NOMINAL_STEP_TIME)
-    extra = [ax.friction_claim(rows, spec, line)] if line else []
+    slopes = {r["slope_deg"] for r in line}
+    mus = {r["friction"] for r in line if r["slope_deg"] == 22.5}
+    extra = [
+        ax.friction_claim(rows, spec, line)
+        if 22.5 in slopes and 1.0 in mus and len(mus) > 1
+        else _absent(
+            "friction: μ 0.4–0.6 may be insufficient on the incline (22.5°)",
+            "0.4–0.6 may be insufficient",
+            f"t_c = {NOMINAL_STEP_TIME:g} s, stiff, 22.5° at μ = 1 and a lower μ",
+        )
+    ]
     if trials.paper_ga is not None:
         ga_rows.insert(
             1, ax.paper_gait_claim(trials.paper_ga, "played by `slopewalk sweep` (claim_trials)")

@@ -73,7 +73,7 @@ def test_sweep_report_writes_claims_and_figures(report):
     assert all(line.count("|") == 9 for line in rows)  # no stray '|' inside a cell
     assert not list(out.glob("*.part"))
     absent = [c for c, cells in claims.items() if cells[4] == "not in this sweep"]
-    assert len(absent) == 5, absent  # step time, slopes, 10x mass, LIPM, torques
+    assert len(absent) == 6, absent  # step time, slopes, friction, 10x mass, LIPM, torques
     assert _claim(claims, "doubling")[4] != "not in this sweep"  # its {legs = 2} trial is there
 
 
