@@ -26,6 +26,33 @@ returns from the compiled kernel's IK; ``joint_gap`` is its readable numpy twin,
 equal by a test; the ankle rolls are kept within their limits by the tilt bounds).
 Both count as infeasible for every constraint treatment.
 
+What a real robot needs besides the ZMP (issue 21), each with its physical basis:
+
+* **A bent knee** (``min_knee_flexion``): the knee stays at least the servo's
+  compliance band, stall torque / kp (0.162 rad for the AX-12A), away from straight at
+  every sample. The proportional servo holds a joint only to within τ/kp of its
+  command, up to that band at full torque, so a knee planned nearer to straight can be
+  pushed straight by its load, where the leg loses its vertical degree of freedom; and
+  near the straight knee the IK's joint rates and accelerations grow as 1/sin κ, so the
+  planned ZMP is not a continuous function of the gait there (at 1 s, −10° 1e-7 m of
+  hip height moved the margin between −97 and −540 mm). The band is the search's lower
+  knee limit (``search_limits``), checked per individual through the joint gap, and it
+  caps the hip height (``hip_height_bounds``).
+* **Swing clearance** (``swing_clearance``): the peak lift is at least
+  hip_width · sin(TIP_ANGLE) (7.4 mm for the Bioloid). The simulator does not call a
+  rock of the stance foot on its inner edge a tip below ``verdict.TIP_ANGLE``; such a
+  rock lowers the swing sole's far edge, one hip width from that edge, by
+  Lh sin φ, so a lift below it lets a tolerated rock put the swing foot on the plane.
+* **No planned foot slide**: the largest slide of a loaded foot in double support
+  (``verdict.planned_slide``, at the GA's samples) is at most ``verdict.SLIP_DISTANCE``,
+  the simulator's own slip threshold, so the plan never asks for what the simulator
+  would call a slip.
+* **Friction**: the largest |F_t| / F_n of the total ground force is at most the cell's
+  μ (``GaitProblem.friction``): beyond it the plane cannot hold the planned walk.
+
+The slide and friction are constraints (``Measurement``), like the joint gap: an
+individual past either is inadmissible for every treatment.
+
 The bounds below come from the same geometry as ``plan._solve`` (hip and
 swing-ankle targets in each leg's tilted plane, see ``ik.tilted_plane_height``):
 for a hip-to-ankle vector (u, w) in the leg plane, w is affine in the pelvis
@@ -36,7 +63,7 @@ min/max over the samples of one walk and over a grid of tilts.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -44,9 +71,11 @@ from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.ik import tilted_plane_height, two_link_ik
 from slopewalk.planner.joints import JOINT_KINDS, RIGHT, principal_angle
+from slopewalk.planner.kinematics import GRAVITY
 from slopewalk.planner.plan import score
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.trajectory import Curve, Timeline, blend
+from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
 
 VARIABLES = ("hip_height", "swing_lift", "tilt")
 EXTENDED = (*VARIABLES, "pelvis_offset", "step_length", "sway_share")
@@ -54,10 +83,10 @@ FAMILIES = {"paper": VARIABLES, "extended": EXTENDED}
 STEP_PER_THIGH = (0.5, 1.0)  # the extended family's step length L, as shares of the thigh
 CONSTRAINTS = ("penalty", "margin", "stability")
 PENALTY = 1e4  # p of eq. (6), added to the work [J] of an infeasible gait
-MIN_CLEARANCE = 0.005  # [m] smallest swing lift searched: the sole clears the plane by 5 mm
 SAMPLES_PER_STEP = 100  # GA grid: dt = step_time / 100, plus phase-change limits and refinement
 INADMISSIBLE_GAP = 1.0  # constraint value [m or rad] given to an unreachable individual
 _TILT_GRID = 61  # tilts tried when a bound is the best over all tilts
+_UNMEASURED = np.zeros(0)  # a ``Measurement`` gap not given: 0 for every individual
 
 
 @dataclass(frozen=True)
@@ -96,17 +125,30 @@ class Measurement:
     Attributes:
         work: Joint work Σ∫|τθ̇|dt [J]; inf where unreachable.
         margin: Minimum signed ZMP margin [m], positive inside; −inf where unreachable.
-        joint_gap: Worst excursion of a pitch joint past its limit [rad] (``joint_gap``);
-            ≤ 0 when admissible, inf where unreachable.
+        joint_gap: Worst excursion of a pitch joint past its search limit [rad]
+            (``joint_gap``, ``search_limits``); ≤ 0 when admissible, inf where unreachable.
+        friction_gap: Largest friction ratio |F_t|/F_n less the floor's μ [-]; ≤ 0 when
+            the plane holds the walk. Not given: not measured (0).
+        slide_gap: Largest planned slide of a loaded foot in double support less
+            ``SLIP_DISTANCE`` [m]; ≤ 0 when no foot slides. Not given: not measured (0).
     """
 
     work: np.ndarray
     margin: np.ndarray
     joint_gap: np.ndarray
+    friction_gap: np.ndarray = field(default_factory=lambda: _UNMEASURED)
+    slide_gap: np.ndarray = field(default_factory=lambda: _UNMEASURED)
+
+    def __post_init__(self) -> None:
+        for name in ("friction_gap", "slide_gap"):
+            if getattr(self, name) is _UNMEASURED:
+                object.__setattr__(self, name, np.zeros(np.shape(self.work)))
 
     @property
     def admissible(self) -> np.ndarray:
-        return np.isfinite(self.work) & np.isfinite(self.margin) & (self.joint_gap <= 0)
+        """Reachable, every pitch joint inside its search limits, no slide, friction held."""
+        finite = np.isfinite(self.work) & np.isfinite(self.margin)
+        return finite & (self.joint_gap <= 0) & (self.friction_gap <= 0) & (self.slide_gap <= 0)
 
     @property
     def feasible(self) -> np.ndarray:
@@ -114,15 +156,45 @@ class Measurement:
         return self.admissible & (self.margin >= 0)
 
 
+def min_knee_flexion(spec: RobotSpec) -> float:
+    """Least knee flexion the search admits [rad]: the servo's compliance band, stall / kp.
+
+    A proportional servo of gain kp with torque limit τ_max sits τ/kp off its command,
+    up to τ_max / kp at full torque (0.162 rad for the AX-12A); a knee planned nearer
+    to straight than that can be pushed straight by its load (module doc).
+    """
+    if spec.stiffness <= 0:
+        raise SlopewalkError(
+            f"servo stiffness {spec.stiffness:g} N m/rad: must be > 0 for the search's "
+            "least knee flexion (stall torque / stiffness)"
+        )
+    return float(spec.stall_torque / spec.stiffness)
+
+
+def search_limits(spec: RobotSpec) -> np.ndarray:
+    """Joint limits of the search per Table-I joint [rad], (8, 2): the spec's, with the knee's
+    lower limit raised to ``min_knee_flexion`` (never below the spec's own)."""
+    limits = np.array([spec.joint_limits[kind] for kind in JOINT_KINDS], dtype=float)
+    knee = np.array([kind == "knee" for kind in JOINT_KINDS])
+    limits[knee, 0] = np.maximum(limits[knee, 0], min_knee_flexion(spec))
+    return limits
+
+
+def swing_clearance(spec: RobotSpec) -> float:
+    """Smallest peak swing lift Szmax searched [m]: hip_width · sin(TIP_ANGLE) (module doc)."""
+    return float(spec.hip_width * np.sin(TIP_ANGLE))
+
+
 def knee_distance_range(spec: RobotSpec) -> tuple[float, float]:
-    """Hip-to-ankle distances [m] the knee's joint limits allow.
+    """Hip-to-ankle distances [m] the search's knee limits allow.
 
     With knee flexion κ (0 = straight) the law of cosines gives
     d² = L1² + L2² + 2 L1 L2 cos κ; the upper knee limit sets the shortest d, the
-    lower one (or the straight leg, κ = 0, if the limit allows hyperextension)
-    the longest.
+    search's lower one (``search_limits``: at least ``min_knee_flexion`` bent) the
+    longest.
     """
-    lo, hi = spec.joint_limits["knee"]
+    lo = max(spec.joint_limits["knee"][0], min_knee_flexion(spec))
+    hi = spec.joint_limits["knee"][1]
     L1, L2 = spec.shank, spec.thigh
 
     def d(kappa):
@@ -204,7 +276,8 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
 
     Each angle is the joint's configuration, its principal value in (−π, π]
     (``joints.principal_angle``), as in a plan; the compiled kernel gets its
-    extremes from tan(q/2).
+    extremes from tan(q/2). The limits are the search's (``search_limits``: the knee
+    at least ``min_knee_flexion`` bent).
     """
     X = np.atleast_2d(np.asarray(population, dtype=float))
     u, w, _, _ = leg_vectors(spec, timeline, *X.T)
@@ -218,12 +291,13 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
             strict=False,
         )
     gaps = []
+    limits = dict(zip(JOINT_KINDS, search_limits(spec), strict=True))
     for kind, q in (
         ("hip_pitch", thigh.p),
         ("knee", shank.p - thigh.p),
         ("ankle_pitch", -shank.p),
     ):
-        lo, hi = spec.joint_limits[kind]
+        lo, hi = limits[kind]
         q = principal_angle(q)
         gaps.append(np.maximum(lo - q, q - hi).max(axis=(1, 2)))
     gap = np.max(gaps, axis=0)
@@ -245,7 +319,8 @@ def hip_height_bounds(
     ``knee_distance_range``) at every sample, both legs, with the smallest lift.
     This is a necessary condition only: the hip- and ankle-pitch limits cut
     further into the box and are checked per individual (``joint_gap``).
-    Highest: both legs reach every target (d < d_max), which is decided in the
+    Highest: both legs reach every target with the knee bent by at least
+    ``min_knee_flexion`` (d ≤ d_max of ``knee_distance_range``), which is decided in the
     double support where the lift plays no part. Each is a closed form per
     sample (w is affine in h = Hz − Lan with slope 1/cos λ):
     h ≥ cos λ (√(d_min² − u²) − w₀) and h ≤ cos λ (√(d_max² − u²) − w₀),
@@ -270,7 +345,7 @@ def swing_lift_bounds(
 ) -> tuple[float, float]:
     """Smallest and largest swing lift Szmax [m] worth searching.
 
-    Smallest: ``MIN_CLEARANCE``. Largest: at the highest pelvis each tilt admits,
+    Smallest: ``swing_clearance``. Largest: at the highest pelvis each tilt admits,
     the swing knee stays within its limit at mid-swing: w₀ + h/cos λ − ℓ Szmax/cos λ
     ≥ √(d_min² − u²) for every SSP sample (ℓ > 0), best over the tilts.
     """
@@ -288,7 +363,7 @@ def swing_lift_bounds(
     highest = lift.min(axis=(1, 2))
     if shapes is not None:  # the corners where the knee decides and some pelvis height is left
         highest = highest[np.isfinite(highest) & np.isfinite(h[:, 0, 0])]
-    return MIN_CLEARANCE, float(highest.max())
+    return swing_clearance(spec), float(highest.max())
 
 
 def _shape_grid(tilt_range, shapes):
@@ -393,15 +468,20 @@ class GaitProblem:
             and in the extended family its δ, L and w too.
         bounds: The search box (default: ``gait_bounds`` of the family).
         family: "paper" (Hz, Szmax, tilt) or "extended" (and δ, L, w).
+        friction: The floor's Coulomb μ: a gait whose friction ratio exceeds it is
+            inadmissible (module doc). 1.0 is the bench's default floor.
     """
 
     spec: RobotSpec
     params: GaitParams
     bounds: Bounds | None = None
     family: str = "paper"
+    friction: float = 1.0
 
     def __post_init__(self) -> None:
         check_family(self.family)
+        if not self.friction > 0:
+            raise SlopewalkError(f"friction {self.friction!r}: must be > 0 (Coulomb μ)")
         if self.bounds is None:
             object.__setattr__(self, "bounds", gait_bounds(self.spec, self.params, self.family))
 
@@ -419,8 +499,12 @@ class GaitProblem:
                 f"population of shape {X.shape}: the {self.family} family has {width} "
                 f"variables ({', '.join(FAMILIES[self.family])})"
             )
-        work, margin, gap = score(self.spec, self.params, X)
-        return Measurement(work, margin, gap)
+        loaded = LOADED_FRACTION * self.spec.total_mass * GRAVITY
+        work, margin, gap, friction, slide = score(
+            self.spec, self.params, X, contact=True, limits=search_limits(self.spec),
+            loaded=loaded,
+        )  # fmt: skip
+        return Measurement(work, margin, gap, friction - self.friction, slide - SLIP_DISTANCE)
 
 
 def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray | None]:
@@ -430,28 +514,30 @@ def objectives(m: Measurement, constraint: str) -> tuple[np.ndarray, np.ndarray 
     outside, or a joint past its limit), G = None; an unreachable individual gets
     F = 2·10⁴ and w is capped at 10⁴ so that no feasible gait scores worse than
     an infeasible one.
-    "margin": F = w, G = (−min margin [m], joint gap [rad]) ≤ 0, so the search
+    Every treatment with constraints also has G columns friction gap [-] and slide
+    gap [m] ≤ 0 (``Measurement``); the penalty counts either past 0 as infeasible.
+    "margin": F = w, G = (−min margin [m], joint gap [rad], …) ≤ 0, so the search
     sees how far from feasible an individual is (pymoo sums the positive parts
     into one violation; both are 0 for a feasible gait, so the units only weigh
     infeasible ones against each other); unreachable individuals get w = 2·10⁴
     and G = 1.
     "stability" (the stability envelope's first question): the most stable gait,
-    F = −min margin [m], G = (joint gap [rad],) ≤ 0; unreachable individuals get
+    F = −min margin [m], G = (joint gap [rad], …) ≤ 0; unreachable individuals get
     F = 1 m (farther outside than any foot) and G = 1. The work plays no part.
 
     Returns:
-        (F, G): shapes (P,) and (P, 2), (P, 1) or None.
+        (F, G): shapes (P,) and (P, 4), (P, 3) or None.
     """
     reachable = np.isfinite(m.work) & np.isfinite(m.margin)
     work = np.where(reachable, np.minimum(m.work, PENALTY), 2 * PENALTY)
     if constraint == "penalty":
         return np.where(reachable, work + PENALTY * ~m.feasible, 2 * PENALTY), None
     if constraint == "margin":
-        G = np.column_stack([-m.margin, m.joint_gap])
+        G = np.column_stack([-m.margin, _admissibility(m)])
         return work, np.where(reachable[:, None], G, INADMISSIBLE_GAP)
     if constraint == "stability":
         F = np.where(reachable, -m.margin, INADMISSIBLE_GAP)
-        return F, np.where(reachable, m.joint_gap, INADMISSIBLE_GAP)[:, None]
+        return F, np.where(reachable[:, None], _admissibility(m), INADMISSIBLE_GAP)
     raise SlopewalkError(f"constraint {constraint!r}: must be one of {', '.join(CONSTRAINTS)}")
 
 
@@ -459,7 +545,8 @@ def pareto_objectives(m: Measurement) -> tuple[np.ndarray, np.ndarray]:
     """Objectives (work [J], −min margin [m]) and the admissibility constraint of NSGA-II.
 
     Returns:
-        (F, G): shapes (P, 2) and (P, 1); G = joint gap [rad] ≤ 0, 1 if unreachable.
+        (F, G): shapes (P, 2) and (P, 3); G = (joint gap [rad], friction gap [-], slide
+        gap [m]) ≤ 0, 1 if unreachable.
     """
     reachable = np.isfinite(m.work) & np.isfinite(m.margin)
     F = np.column_stack(
@@ -468,7 +555,12 @@ def pareto_objectives(m: Measurement) -> tuple[np.ndarray, np.ndarray]:
             np.where(reachable, -m.margin, INADMISSIBLE_GAP),
         ]
     )
-    return F, np.where(reachable, m.joint_gap, INADMISSIBLE_GAP)[:, None]
+    return F, np.where(reachable[:, None], _admissibility(m), INADMISSIBLE_GAP)
+
+
+def _admissibility(m: Measurement) -> np.ndarray:
+    """(joint gap [rad], friction gap [-], slide gap [m]), shape (P, 3): each ≤ 0 admissible."""
+    return np.column_stack([m.joint_gap, m.friction_gap, m.slide_gap])
 
 
 def joint_limit_excess(spec: RobotSpec, q) -> dict[str, float]:

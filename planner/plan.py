@@ -427,7 +427,7 @@ def columns(params: GaitParams, population) -> np.ndarray:
     return np.column_stack([pop, np.broadcast_to(extra, (len(pop), 3))])
 
 
-def score(spec: RobotSpec, params: GaitParams, population):
+def score(spec: RobotSpec, params: GaitParams, population, **contact):
     """Work, minimum ZMP margin and joint-limit gap of every individual of a population.
 
     Args:
@@ -444,8 +444,11 @@ def score(spec: RobotSpec, params: GaitParams, population):
         continuous walk's (module doc); the gap is the worst excursion of a pitch joint
         (q2..q7) past its limit over the samples (≤ 0 inside the limits). An individual
         whose legs cannot reach its targets gets work = inf, margin = −inf, gap = inf.
+        With ``contact`` (``KernelWalk.scores``'s contact=True, limits, loaded) also the
+        largest friction ratio [-] and planned slide of a loaded foot [m], each (P,).
     """
-    return kernel_walk(spec, Timeline.of(params)).scores(params.slope, columns(params, population))
+    walk = kernel_walk(spec, Timeline.of(params))
+    return walk.scores(params.slope, columns(params, population), **contact)
 
 
 def evaluate(spec: RobotSpec, params: GaitParams, population) -> tuple[np.ndarray, np.ndarray]:

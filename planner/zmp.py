@@ -22,6 +22,8 @@ computed by separate code and checked against each other in the tests.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from slopewalk.planner.newton_euler import cross
@@ -166,3 +168,50 @@ def signed_margin(points, polygon) -> np.ndarray:
     closest = a + s[..., None] * edge
     seg = np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)).min(axis=1)
     return np.where(line_min >= 0, line_min, -seg)
+
+
+def axis_margins(points, polygon) -> tuple[np.ndarray, np.ndarray]:
+    """Per-axis signed ZMP margins [m] in the slope frame: (sagittal along x_S, lateral along y_S).
+
+    The margin along an axis is the signed distance, along that axis alone, from the
+    point to the boundary of the polygon's chord through the point parallel to the axis:
+    for x, the chord [x_lo, x_hi] that the line y = p_y cuts from the polygon, and the
+    margin min(p_x − x_lo, x_hi − p_x); positive inside the chord, negative outside by
+    the distance to its nearer end. Where the line misses the polygon (the point lies
+    beyond it along the other axis) the chord is taken at the polygon's nearest extreme
+    of that other coordinate, so each axis says only how far along itself the point is
+    from the polygon's extent. For y the roles of x and y swap. ``signed_margin`` (the
+    Euclidean distance to the boundary) is at most either where the point is inside.
+
+    Args:
+        points: (n, 2).
+        polygon: Counter-clockwise vertices of a convex polygon, repeats allowed, (n, V, 2).
+
+    Returns:
+        (sagittal, lateral), each shape (n,); NaN where the point is NaN.
+    """
+    points = np.asarray(points, dtype=float)
+    polygon = np.asarray(polygon, dtype=float)
+    return _chord_margin(points, polygon, 0), _chord_margin(points, polygon, 1)
+
+
+def _chord_margin(points, polygon, axis: int) -> np.ndarray:
+    """Signed distance along ``axis`` from each point to its chord's ends (``axis_margins``)."""
+    other = 1 - axis
+    a = polygon
+    b = np.roll(polygon, -1, axis=1)
+    lo, hi = polygon[..., other].min(axis=1), polygon[..., other].max(axis=1)
+    c = np.clip(points[:, other], lo, hi)[:, None]  # the chord's line, clamped onto the polygon
+    da, db = a[..., other] - c, b[..., other] - c
+    span = b[..., other] - a[..., other]
+    crosses = (da * db <= 0) & (np.abs(span) > 1e-15)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(crosses, -da / np.where(crosses, span, 1.0), np.nan)
+    cut = a[..., axis] + t * (b[..., axis] - a[..., axis])
+    on = np.abs(da) <= 1e-15  # a vertex on the line (a flat edge along the axis: both ends)
+    ends = np.concatenate([cut, np.where(on, a[..., axis], np.nan)], axis=1)
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a NaN point: an all-NaN row
+        low, high = np.nanmin(ends, axis=1), np.nanmax(ends, axis=1)
+    p = points[:, axis]
+    return np.minimum(p - low, high - p)

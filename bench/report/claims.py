@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -30,14 +31,15 @@ import numpy as np
 
 from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.files import atomic_path
+from slopewalk.bench.report import claim_axes as ax
 from slopewalk.bench.report import figures
 from slopewalk.bench.sim.model import servo_settings
 from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
+from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.plan import Plan, plan_walk
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.verdict import PAPER_VERDICTS
-from slopewalk.planner.zmp import signed_margin
 
 NOMINAL_STEP_TIME = 1.0  # [s]
 SIM_VERDICTS = SIMULATED_VERDICTS  # the sweep table's, "error" included
@@ -61,7 +63,9 @@ def _missing(line: list[dict], key: str, needed) -> list[float]:
 
 def _absent(claim: str, paper: str, needs: str, evidence: str = "-") -> dict:
     """A claim whose cases this sweep does not hold: no number, the cases it needs."""
-    return _claim(claim, paper, f"{NOT_IN_SWEEP}: needs {needs}", "-", NOT_IN_SWEEP, evidence)
+    return _claim(
+        claim, paper, f"{NOT_IN_SWEEP}: needs {needs}", "-", NOT_IN_SWEEP, evidence, "-", "-"
+    )
 
 
 def _line(rows, **where) -> list[dict]:
@@ -81,7 +85,10 @@ def _yes(analytic: bool | None, simulated: bool | None) -> str:
     return f"analytic {word[analytic]}, simulated {word[simulated]}"
 
 
-def _claim(claim, paper, analytic, simulated, agree, evidence) -> dict:
+def _claim(claim, paper, analytic, simulated, agree, evidence, axes_text, basis) -> dict:
+    """One row. ``axes_text``: the smallest lateral and sagittal margins of the walks the
+    row is about (``claim_axes.axes``); ``basis``: what the finding rests on
+    (``claim_axes.BASIS`` words)."""
     return {
         "claim": claim,
         "paper": paper,
@@ -89,7 +96,18 @@ def _claim(claim, paper, analytic, simulated, agree, evidence) -> dict:
         "simulated": simulated,
         "agree": agree,
         "evidence": evidence,
+        "axes": axes_text,
+        "basis": basis,
     }
+
+
+def _nominal(spec: RobotSpec, step_time: float, slope_deg: float = 0.0, rows=None) -> Plan:
+    """The nominal gait's plan (the sweep's steps of that case when ``rows`` hold it)."""
+    steps = next((int(r["steps"]) for r in rows or [] if r.get("steps")), None)
+    extra = {"steps": steps} if steps else {}
+    return plan_walk(
+        spec, GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope_deg), **extra)
+    )
 
 
 STEP_TIME_CLAIM = (
@@ -102,7 +120,7 @@ SLOPE_CLAIM = (
 )
 
 
-def step_time_claim(rows) -> dict:
+def step_time_claim(rows, spec: RobotSpec) -> dict:
     flat = _line(rows, slope_deg=0.0, friction=1.0)
     if missing := _missing(flat, "step_time", STEP_TIME_CASES):
         return _absent(
@@ -113,6 +131,14 @@ def step_time_claim(rows) -> dict:
     ok_a = [r["step_time"] for r in flat if r["analytic_verdict"] == "stable"]
     ok_s = [r["step_time"] for r in flat if r["simulated_verdict"] == "stable"]
     by_t = {r["step_time"]: r for r in flat}
+    plans = [(f"{t:g} s", _nominal(spec, t, 0.0, [by_t[t]])) for t in STEP_TIME_CASES]
+    sagittal = {t: ax.axis_minima(p)[1] for t, (_, p) in zip(STEP_TIME_CASES, plans, strict=True)}
+    front = sagittal[0.5] >= 0 > sagittal[0.4]
+    decides = (
+        "; the lateral limit decides every step time outside"
+        if all(ax.decided_by(p) in ("lateral", "neither") for _, p in plans)
+        else ""
+    )
 
     def agrees(key):
         return (
@@ -123,10 +149,17 @@ def step_time_claim(rows) -> dict:
     return _claim(
         *STEP_TIME_CLAIM,
         f"ZMP inside the polygon at t_c = {_fmt_list(ok_a)} s; min margin at 0.5 s "
-        f"{by_t.get(0.5, {}).get('analytic_min_margin_mm', float('nan')):.1f} mm",
+        f"{by_t.get(0.5, {}).get('analytic_min_margin_mm', float('nan')):.1f} mm"
+        f"{decides}",
         f"no tip/slip/fall at t_c = {_fmt_list(ok_s)} s (μ = 1)",
-        _yes(agrees("analytic_verdict"), agrees("simulated_verdict")),
+        _yes(agrees("analytic_verdict"), agrees("simulated_verdict"))
+        + f"; front to back: {'yes' if front else 'no'} (sagittal inside at 0.5 s, "
+        "outside at 0.4 s)",
         "stability_map.png, sweep.csv (slope 0)",
+        ax.labelled_axes(plans),
+        f"lateral: {ax.SHAPE} (the lean is 12° at every step time, so its sway's "
+        f"acceleration grows as 1/t_c²) and {ax.ESTIMATE} (the 60 mm foot width); "
+        f"sagittal: {ax.PHYSICS}",
     )
 
 
@@ -140,23 +173,34 @@ def slope_claim(rows, spec: RobotSpec) -> dict:
         )
     inside = [r["slope_deg"] for r in line if r["analytic_verdict"] == "stable"]
     stable = [r["slope_deg"] for r in line if r["simulated_verdict"] == "stable"]
-    rear = []
+    rear, plans = [], []
+    by_slope = {r["slope_deg"]: r for r in line}
     for slope in (0.0, 15.0, 18.0, 22.5):
-        plan = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME, slope=np.deg2rad(slope)))
+        plan = _nominal(spec, NOMINAL_STEP_TIME, slope, [by_slope[slope]])
         ssp = ~plan.double_support
         rear.append(
             f"{slope:g}°: {np.mean(plan.zmp[ssp, 0] - plan.stance_sole[ssp, 0]) * 1e3:+.1f}"
         )
+        plans.append((f"{slope:g}°", plan))
+    margins = {r["slope_deg"]: r["analytic_min_margin_mm"] for r in line}
 
-    def agrees(ok):
-        return {15.0, 18.0, 22.5} <= set(ok) and not {25.0, 30.0} & set(ok)
+    def word(ok):
+        """yes: inside to 22.5° and not beyond; partly: inside to 15° and not beyond 22.5°."""
+        if {15.0, 18.0, 22.5} <= set(ok) and not {25.0, 30.0} & set(ok):
+            return "yes"
+        return "partly" if 15.0 in ok and not {25.0, 30.0} & set(ok) else "no"
 
     return _claim(
         *SLOPE_CLAIM,
-        f"inside at {_fmt_list(inside)}°; mean SSP ZMP x from the ankle [mm]: {'; '.join(rear)}",
+        f"inside at {_fmt_list(inside)}°; min margin at 18°: {margins[18.0]:.1f} mm, at 22.5°: "
+        f"{margins[22.5]:.1f} mm; mean SSP ZMP x from the ankle [mm]: {'; '.join(rear)}",
         f"stable at {_fmt_list(stable)}° (μ = 1)",
-        _yes(agrees(inside), agrees(stable)),
+        f"analytic {word(inside)}, simulated {word(stable)}",
         "stability_map.png, zmp_traces.png, sweep.csv (t_c = 1 s)",
+        ax.labelled_axes(plans[1:]),
+        f"sagittal: {ax.PHYSICS} (gravity along the plane moves the ZMP back by c_z tan θs) "
+        f"and {ax.SHAPE} (the hip spline holds the single-support ZMP ~20 mm ahead of the "
+        "ankle on flat ground; crouching is the family's only sagittal knob)",
     )
 
 
@@ -166,8 +210,11 @@ MASS_CASES = (  # (mass_scale, claim, paper)
 )
 
 
-def mass_claims(rows, spec: RobotSpec) -> list[dict]:
-    """The paper's mass cases at t_c = 1 s on flat ground, each where the sweep holds it."""
+def mass_claims(rows, spec: RobotSpec, mass_servo=None) -> list[dict]:
+    """The paper's mass cases at t_c = 1 s on flat ground, each where the sweep holds it.
+
+    ``mass_servo``: ``claim_trials.mass_servo_trials`` (the 10× robot in the spec-servo
+    modes with its servo unscaled and scaled ×10), shown beside the sweep's stiff walk."""
     base = plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME))
     nominal = _line(rows, step_time=NOMINAL_STEP_TIME, slope_deg=0.0)
     same = {r["friction"]: r["simulated_verdict"] for r in nominal}
@@ -192,6 +239,7 @@ def mass_claims(rows, spec: RobotSpec) -> list[dict]:
             for r in sim
         )
         compared = all(r["friction"] in same for r in sim)  # the nominal masses at that μ
+        basis = f"{ax.PHYSICS} (the ZMP of eq. (4) is invariant to a uniform mass scale)"
         if scale == "all=10":  # unchanged: same verdict as the nominal masses at that μ
             agree = _yes(
                 shift < 1e-6,
@@ -199,6 +247,19 @@ def mass_claims(rows, spec: RobotSpec) -> list[dict]:
                 if compared
                 else None,
             )
+            if mass_servo:
+                sim_text += (
+                    " (stiff); spec servo at 1 s, μ 1: " + ax.mass_servo_text(mass_servo) + ""
+                )
+                agree += (
+                    "; with the servo scaled ×10 "
+                    + ("yes" if ax.mass_servo_same(mass_servo) else "no")
+                    + " (the nominal robot's walks exactly)" * ax.mass_servo_same(mass_servo)
+                )
+                basis += (
+                    f"; simulated: {ax.ESTIMATE} (an unscaled servo is a weaker robot, not a "
+                    "heavier one)"
+                )
         else:  # pushed out: unstable where the nominal masses were stable
             agree = _yes(
                 plan.margin.min() < 0 <= base.margin.min(),
@@ -219,6 +280,11 @@ def mass_claims(rows, spec: RobotSpec) -> list[dict]:
                 ),
                 agree,
                 "sweep.csv (mass_scale)",
+                f"{scale.replace('=', ' × ')}: {ax.axes(plan)}; nominal: {ax.axes(base)}",
+                basis
+                if scale == "all=10"
+                else f"{ax.PHYSICS} and {ax.ESTIMATE} (the legs' masses: the nominal gait "
+                "has little lateral margin to lose)",
             )
         )
     return out
@@ -251,29 +317,26 @@ def lipm_claim(rows, spec: RobotSpec) -> dict:
             f"flat ground, μ = 1, stiff at two step times or more (this sweep: "
             f"{_fmt_list(times)} s)",
         )
-    fastest = times[0]
-    fast = plan_walk(spec, GaitParams.nominal(spec, fastest))
-    lipm_margin = signed_margin(fast.zmp_lipm, fast.polygon).min() * 1e3
     text = ", ".join(f"{t:g} s: {a:.1f}" for t, a in zip(times, analytic, strict=True))
     grows = analytic[0] > 5 * analytic[-1]
+    in_range, axes_text, split = ax.lipm_in_range(spec, times)
+    below = [t for t in times if t < ax.PAPER_RANGE[0]]
     return _claim(
         *LIPM_CLAIM,
-        f"RMS distance ZMP to LIPM [mm]: {text}; at {fastest:g} s the LIPM ZMP's min margin is "
-        f"{lipm_margin:.0f} mm (multibody {fast.margin.min() * 1e3:.0f} mm)",
+        f"RMS distance ZMP to LIPM [mm]: {text}; {in_range}"
+        + (f" ({_fmt_list(below)} s lie below the paper's range)" if below else ""),
         "RMS distance CoP to LIPM [mm]: "
         + ", ".join(f"{t:g} s: {s:.1f}" for t, s in zip(times, simulated, strict=True)),
-        (
-            f"partly: analytic, the distance grows with speed but at {fastest:g} s the LIPM "
-            "ZMP is outside too"
-            if grows and lipm_margin < 0
-            else _yes(grows, None).split(",")[0]
-        )
+        _yes(grows and bool(split), None).split(",")[0]
+        + " (judged over the paper's 2–0.5 s)"
         + (
             "; simulated CoP vs LIPM grows too"
             if simulated[0] > simulated[-1]
             else "; simulated CoP vs LIPM does not grow"
         ),
         "lipm_vs_step_time.png",
+        axes_text,
+        f"{ax.PHYSICS} (the LIPM leaves out the limbs' own accelerations)",
     )
 
 
@@ -311,6 +374,9 @@ def torque_claim(plan, result) -> dict:
             _rms(np.where(stance_right, right, left)) > _rms(np.where(stance_right, left, right)),
         ),
         "joint_torques.png",
+        f"nominal 1 s: {ax.axes(plan)}",
+        f"analytic: {ax.PHYSICS}; simulated: {ax.ESTIMATE} (the armature is scaled from "
+        "another servo)",
     )
 
 
@@ -338,6 +404,8 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> 
                 "-",
                 "not checked: no GA results",
                 "-",
+                "-",
+                "-",
             )
         ]
 
@@ -352,7 +420,7 @@ def ga_claims(optimize_dir: str | Path, spec: RobotSpec, simulate: Callable) -> 
     nominal = [(p, r) for p, r in reports if abs(r["foot_length_m"] - spec.foot_length) < 1e-9]
     at = {round(r["slope_deg"], 3): (p, r) for p, r in nominal}  # degrees pass through radians
     if 22.5 in at:
-        out.append(_ga_claim_22_5(*at[22.5], play, optimize_dir))
+        out.append(_ga_claim_22_5(*at[22.5], play, optimize_dir, spec))
     if 30.0 in at:
         out.append(_ga_claim_30(*at[30.0], reports, spec, play, optimize_dir))
     return out
@@ -385,14 +453,15 @@ def _describe(report: dict) -> str:
     b = report["best"]
     return (
         f"{'feasible' if report['feasible'] else 'INFEASIBLE'}: Hz {b['hip_height_m']:.3f}"
-        f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {b['tilt_deg']:.2f}°, work "
+        f" m, Szmax {b['swing_lift_m']:.3f} m, θ1max {-b['tilt_deg']:.2f}° (lean "
+        f"{b['tilt_deg']:.2f}°), work "
         f"{b['work_J']:.3f} J, min margin {b['min_margin_m'] * 1e3:.1f} mm"
         + _fine_check(report)
         + f" [{_constraint(report)} constraint]"
     )
 
 
-def _ga_claim_22_5(path: Path, r: dict, play: Callable, optimize_dir) -> dict:
+def _ga_claim_22_5(path: Path, r: dict, play: Callable, optimize_dir, spec) -> dict:
     """The paper's 22.5° case: the GA's gait and whether its ZMP stays inside."""
     return _claim(
         "GA at 22.5°: θ1max = −9.18°, Hz = 0.151 m, Szmax = 0.013 m, ZMP inside",
@@ -401,7 +470,25 @@ def _ga_claim_22_5(path: Path, r: dict, play: Callable, optimize_dir) -> dict:
         play(r)[0],
         _yes(r["feasible"], play(r)[1]),
         _relative(path, optimize_dir),
+        _report_axes(r, spec),
+        f"{ax.ESTIMATE} (foot, masses, joint limits: the gait found differs from the paper's)",
     )
+
+
+def _report_axes(report: dict, spec: RobotSpec) -> str:
+    """``claim_axes.axes`` of a ``slopewalk optimize`` report's best gait on its foot."""
+    robot = spec.with_foot_length(report["foot_length_m"], extend="both")
+    robot = replace(robot, ankle_to_toe=report["ankle_to_toe_m"])
+    best = report["best"]
+    gait = GaitParams.nominal(
+        robot, report["step_time_s"], slope=np.deg2rad(report["slope_deg"]),
+        steps=report.get("steps", 4), hip_height=best["hip_height_m"],
+        swing_lift=best["swing_lift_m"], tilt=np.deg2rad(best["tilt_deg"]),
+    )  # fmt: skip
+    try:
+        return ax.axes(plan_walk(robot, gait))
+    except SlopewalkError as err:
+        return f"not plannable at 1 ms ({err})"
 
 
 def _ga_claim_30(
@@ -441,6 +528,9 @@ def _ga_claim_30(
             play(first[2])[1] if first else None,
         ),
         _relative(first[1] if first else path, optimize_dir),
+        f"nominal foot: {_report_axes(r, spec)}"
+        + (f"; {first[0] * 1e3:.0f} mm foot: {_report_axes(first[2], spec)}" if first else ""),
+        f"{ax.ESTIMATE} (the foot's length: an estimate the 30° answer turns on)",
     )
 
 
@@ -572,7 +662,7 @@ def write_report(
         hz = GaitParams.nominal(specs[name], NOMINAL_STEP_TIME)
         nominal = (
             f"Nominal gait unless stated: Hz = {hz.hip_height:.2f} m, lift 0.6 × thigh, tilt "
-            f"{np.rad2deg(hz.tilt):g}°, `hold` profile, stiff actuators."
+            f"{np.rad2deg(hz.tilt):g}°, `hold` profile, stiff actuators. {AXES_NOTE}"
         )
         if sectioned:
             sections += ["", f"## Robot `{name}` ({specs[name].name})", "", nominal, ""]
@@ -595,6 +685,16 @@ def write_report(
     with atomic_path(out / "claims.json") as tmp:
         tmp.write_text(json.dumps(every, indent=2))
     return [*written, out / "claims.json"]
+
+
+AXES_NOTE = (
+    "*Smallest margin by axis*: over the walk, the signed distance along y_S (lateral) or "
+    "x_S (sagittal) alone from the ZMP to the support polygon's boundary at the ZMP's other "
+    "coordinate (`planner.zmp.axis_margins`), positive inside. *Rests on*: physics (any "
+    "gait of this build), the gait family's shape (the paper's splines, fixed lean and hip "
+    "path: another family can move it) or estimated spec values (what "
+    "`planner/robots/bioloid.toml` marks as estimates)."
+)
 
 
 def _header(source: str | None, envelope, rows) -> str:
@@ -639,14 +739,14 @@ def _robot_claims(out: Path, rows, spec, trials, suffix: str, ga_rows, envelope)
         torque = _absent(
             *TORQUE_CLAIM, f"t_c = {NOMINAL_STEP_TIME:g} s on flat ground, μ = 1, stiff"
         )
-    nominal_claims = [step_time_claim(rows), slope_claim(rows, spec)]
+    nominal_claims = [step_time_claim(rows, spec), slope_claim(rows, spec)]
     ga_rows = list(ga_rows or [])
     found = []
     if envelope is not None:
         from slopewalk.bench.report.envelope_claims import envelope_cell_note, envelope_claims
 
         env_rows, cite = envelope[0], str(envelope[1])
-        found = envelope_claims(env_rows, cite)
+        found = envelope_claims(env_rows, cite, spec)
         for c in nominal_claims:
             c["claim"] = "one hand-picked gait (the nominal one): " + c["claim"]
         for c in ga_rows:  # the GA's 22.5° and 30° cases cite the envelope's cell at 1 s
@@ -654,11 +754,28 @@ def _robot_claims(out: Path, rows, spec, trials, suffix: str, ga_rows, envelope)
             if slope is not None and (note := envelope_cell_note(env_rows, slope, cite)):
                 c["analytic"] += note
                 c["evidence"] += f", {cite}"
+    line = _line(rows, step_time=NOMINAL_STEP_TIME)
+    slopes = {r["slope_deg"] for r in line}
+    mus = {r["friction"] for r in line if r["slope_deg"] == 22.5}
+    extra = [
+        ax.friction_claim(rows, spec, line)
+        if 22.5 in slopes and 1.0 in mus and len(mus) > 1
+        else _absent(
+            "friction: μ 0.4–0.6 may be insufficient on the incline (22.5°)",
+            "0.4–0.6 may be insufficient",
+            f"t_c = {NOMINAL_STEP_TIME:g} s, stiff, 22.5° at μ = 1 and a lower μ",
+        )
+    ]
+    if trials.paper_ga is not None:
+        ga_rows.insert(
+            1, ax.paper_gait_claim(trials.paper_ga, "played by `slopewalk sweep` (claim_trials)")
+        )
     claims = [
         *found,
         *nominal_claims,
+        *extra,
         *ga_rows,
-        *mass_claims(rows, spec),
+        *mass_claims(rows, spec, trials.mass_servo),
         lipm_claim(rows, spec),
         torque,
     ]
@@ -673,11 +790,12 @@ def _robot_claims(out: Path, rows, spec, trials, suffix: str, ga_rows, envelope)
 
 def _table(claims: list[dict]) -> list[str]:
     return [
-        "| claim | paper | analytic here | simulated here | bears the paper out? | shown in |",
-        "|---|---|---|---|---|---|",
+        "| claim | paper | analytic here | simulated here | smallest margin by axis (the "
+        "walks of the row) | bears the paper out? | rests on | shown in |",
+        "|---|---|---|---|---|---|---|---|",
     ] + [
         f"| {c['claim']} | {c['paper']} | {c['analytic']} | {c['simulated']} | "
-        f"{c['agree']} | {c['evidence']} |"
+        f"{c.get('axes', '-')} | {c['agree']} | {c.get('basis', '-')} | {c['evidence']} |"
         for c in claims
     ]
 

@@ -207,12 +207,30 @@ def _inner(pi, pieces, times):
     return inner
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def _contact(by_block, at, pi, pieces, loaded):
+    """(largest friction ratio [-], largest slide of a loaded foot in double support [m]) of
+    one individual's rows (``scores``), the samples taken in time order through ``at``."""
+    friction, slide, x0, y0, run = 0.0, 0.0, 0.0, 0.0, False
+    for j in range(at.size):
+        k = at[j]
+        friction = max(friction, by_block[2, k])
+        if pi[pieces[j], tb.SSP] == 0 and by_block[5, k] > loaded:
+            if not run:
+                x0, y0, run = by_block[3, k], by_block[4, k], True
+            slide = max(slide, np.hypot(by_block[3, k] - x0, by_block[4, k] - y0))
+        else:
+            run = False
+    return friction, slide
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
 def scores(
     pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, limits, X, pieces, times,
-    inputs, index, count, size, double, refine,
+    inputs, index, count, size, double, refine, loaded,
 ):  # fmt: skip
-    """Work [J], minimum margin [m], joint gap [rad], samples evaluated, each shape (P,).
+    """Work [J], minimum margin [m], joint gap [rad], samples evaluated, largest friction ratio
+    [-] and largest planned slide of a loaded foot in double support [m], each shape (P,).
 
     The samples: (pieces, times) in time order, in blocks (``tables.Blocks``: inputs,
     index, count, size, double).
@@ -220,9 +238,14 @@ def scores(
     worst max(lower − q, q − upper) of the pitch joints (q2..q7) over the samples,
     from the extremes of tan(q/2) (``sample``: increasing in q on (−π, π)).
     Unreachable individuals get work = inf, margin = −inf, gap = inf.
+    The friction ratio is |F_t| / F_n of the total ground force (inf where F_n ≤ 0). The
+    slide: in each run of double-support samples where the second foot carries more than
+    ``loaded`` [N], the distance its sole moves in the plane from the run's first sample
+    (``planner.verdict.planned_slide``, at these samples); unreachable: both inf.
     """
     P, n, nb = X.shape[0], times.size, count.size
     work_out, margin_out, gap_out = np.empty(P), np.empty(P), np.empty(P)
+    friction_out, slide_out = np.empty(P), np.empty(P)
     count_out = np.full(P, n, dtype=np.int64)
     args = (pf, pi, geometry, dh_a, d5, mass, com, inertia, gravity)
     inner = _inner(pi, pieces, times)
@@ -235,7 +258,8 @@ def scores(
             at[index[b, k]] = b * sm.BLOCK + k
     for p in prange(P):
         scratch = sm.scratch()
-        by_block = np.empty((2, nb * sm.BLOCK))  # margin, power of each block's lanes
+        # margin, power, friction ratio, second sole x and y, its normal force, per lane
+        by_block = np.empty((6, nb * sm.BLOCK))
         x = X[p]
         y = _footprints(landing, x, geometry[tb.HIP_WIDTH])
         sm.start_extremes(scratch)
@@ -250,6 +274,7 @@ def scores(
             lanes = slice(b * sm.BLOCK, (b + 1) * sm.BLOCK)
             nans = sm.keep_block(scratch, size[b], by_block[0, lanes], by_block[1, lanes])
             sm.keep_extremes(scratch, size[b])
+            sm.keep_contact(scratch, size[b], by_block[2:, lanes])
             done += count[b]
             if nans:  # out of reach: no need to go on
                 bad = True
@@ -257,7 +282,9 @@ def scores(
                 break
         if bad:
             work_out[p], margin_out[p], gap_out[p] = np.inf, -np.inf, np.inf
+            friction_out[p], slide_out[p] = np.inf, np.inf
             continue
+        friction_out[p], slide_out[p] = _contact(by_block, at, pi, pieces, loaded)
         margin = np.empty(n)
         low, total, previous = np.inf, 0.0, 0.0
         for j in range(n):  # time order: trapezoid of the power, smallest sampled margin
@@ -275,7 +302,7 @@ def scores(
             low, extra = _refine_all(args, x, y, pieces, times, inner, margin, low, scratch)
             count_out[p] += extra
         work_out[p], margin_out[p], gap_out[p] = total, low, gap
-    return work_out, margin_out, gap_out, count_out
+    return work_out, margin_out, gap_out, count_out, friction_out, slide_out
 
 
 @dataclass(frozen=True)
@@ -333,7 +360,10 @@ class KernelWalk:
         with _LAUNCH:
             return series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
 
-    def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False):
+    def scores(
+        self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False,
+        contact=False, limits=None, loaded: float = np.inf,
+    ):  # fmt: skip
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
 
         Args:
@@ -341,15 +371,24 @@ class KernelWalk:
             samples: "limit" (the GA's: grid plus one-sided limits) or "grid".
             refine: Refine the margin at every local minimum between samples.
             counts: Also return the samples evaluated per individual, (P,).
+            contact: Also return the largest friction ratio [-] and the largest slide of
+                a loaded foot in double support [m], each (P,) (after the counts).
+            limits: Joint limits the gap is measured against [rad], (8, 2); None: the
+                spec's (``limits``).
+            loaded: Normal force [N] above which a second foot in double support counts
+                as loaded for the slide (inf: no slide measured).
         """
         X = self.gait.individuals(X)
         pieces, times = self.limit if samples == "limit" else self.grid
         blocks = self.limit_blocks if samples == "limit" else self.grid_blocks
+        bounds = self.limits if limits is None else np.asarray(limits, dtype=float)
         with _LAUNCH:
             out = scores(
-                *self._args(slope), self.limits, X, pieces, times, *_fields(blocks), refine
+                *self._args(slope), bounds, X, pieces, times, *_fields(blocks), refine,
+                float(loaded),
             )  # fmt: skip
-        return out if counts else out[:3]
+        head = out[:4] if counts else out[:3]
+        return (*head, *out[4:]) if contact else head
 
 
 def _fields(blocks: tb.Blocks) -> tuple:

@@ -795,6 +795,19 @@ def extremes(w, k):
 
 
 @njit(**_KW)
+def keep_contact(w, n, out):
+    """Contact numbers of the first n samples of the block just evaluated, rows of out (4, ≥ n):
+    the friction ratio |F_t| / F_n of the total ground force (inf where F_n ≤ 0), the second
+    (swing) foot's sole x and y in S [m] and the normal force on it [N]."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    for j in range(n):
+        fx, fy, fz = w[_F + j], w[_F + B + j], w[_F + 2 * B + j]
+        out[0, j] = np.hypot(fx, fy) / fz if fz > 0 else np.inf
+        out[1, j], out[2, j] = w[_SW + j], w[_SW + B + j]
+        out[3, j] = w[_FS + 2 * B + j]
+
+
+@njit(**_KW)
 def keep_block(w, n, margins, powers):
     """Margins [m] and Σ|τθ̇| [W] of the first n samples into margins, powers ((≥ n,) each).
 

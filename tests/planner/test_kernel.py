@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.gait_search import GaitProblem, ga_params, joint_gap
+from slopewalk.planner.gait_search import GaitProblem, ga_params, joint_gap, search_limits
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel.run import kernel_walk
 from slopewalk.planner.kernel.tables import T0, T1, GaitTable, limit_samples
@@ -47,8 +47,8 @@ def _population(spec, params, size, seed, family="paper"):
     rng = np.random.default_rng(seed)
     draws = 8 if family == "paper" else 64  # a few % of the extended box is admissible
     X = rng.uniform(problem.bounds.xl, problem.bounds.xu, (draws * size, problem.bounds.xl.size))
-    work, _, gap = score(spec, params, X)
-    X = X[np.isfinite(work) & (gap <= 0)][:size]
+    m = problem.measure(X)  # the search's joint limits: the knee bent by the servo's band
+    X = X[np.isfinite(m.work) & (m.joint_gap <= 0)][:size]
     assert len(X) == size
     return X
 
@@ -192,12 +192,13 @@ def test_joint_gap_equals_the_numpy_joint_check(spec, family):
     X = np.random.default_rng(5).uniform(problem.bounds.xl, problem.bounds.xu, size)
     timeline = Timeline.of(params)
     walk = kernel_walk(spec, timeline)
-    _, _, gap = walk.scores(params.slope, X, samples="grid")  # joint_gap's samples
+    limits = search_limits(spec)
+    _, _, gap = walk.scores(params.slope, X, samples="grid", limits=limits)  # joint_gap's samples
     reference = joint_gap(spec, timeline, X)
     assert np.isinf(gap).any() and (gap > 0).any() and (gap <= 0).any()
     np.testing.assert_allclose(gap, reference, atol=1e-12, rtol=0)
     # the GA's samples (grid, piece ends, probes) see at least as much
-    _, _, ga_gap = score(spec, params, X)
+    _, _, ga_gap = score(spec, params, X, limits=limits)
     finite = np.isfinite(gap)
     assert np.array_equal(np.isfinite(ga_gap), finite)
     assert (ga_gap[finite] >= gap[finite] - 1e-12).all()

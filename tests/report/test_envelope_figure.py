@@ -1,4 +1,5 @@
-"""envelope.png: each boundary encloses exactly the cells where its label holds, labelled."""
+"""envelope.png: one panel per question, each outline around exactly its cells, the paper's
+statements marked, names in the legend."""
 
 import numpy as np
 from matplotlib.collections import LineCollection
@@ -61,28 +62,69 @@ def test_grids_put_each_cell_in_its_place():
     assert g["margin"][0, 1] == 6.0 and g["margin"][2, 0] == -8.0
 
 
-def test_each_boundary_is_drawn_around_its_cells_and_labelled():
+def _drawn(ax) -> list[np.ndarray]:
+    return [np.asarray(c.get_segments()) for c in ax.collections if isinstance(c, LineCollection)]
+
+
+def _found(ax, cells) -> bool:
+    """Whether some outline of ``ax`` runs exactly around ``cells`` (no shift: labels are in
+    the legend, never on a line)."""
+    want = np.array(sorted(edges(_field(cells))))
+    for segments in _drawn(ax):
+        got = np.array(sorted(map(tuple, segments.round(9).tolist())))
+        if got.shape == want.shape and np.allclose(got, want):
+            return True
+    return False
+
+
+def _legend(fig) -> set[str]:
+    return {t.get_text() for legend in fig.legends for t in legend.get_texts()}
+
+
+def test_one_panel_per_question_each_outline_around_its_cells():
+    """The margin panel outlines the feasible cells and the required-margin ones; each mode's
+    panel fills the cells MuJoCo walks and outlines the feasible ones; names only in the
+    legend, no text on the panels."""
     fig = envelope_figure(_rows())
-    ax = fig.axes[0]
-    labels = {t.get_text() for t in ax.texts}
-    assert {"paper: ZMP inside", "MuJoCo stiff walks", "margin ≥ 5 mm"} <= labels
-    assert "MuJoCo servo walks" not in labels  # servo walks no cell: no line
-    drawn = [np.asarray(c.get_segments()) for c in ax.collections if isinstance(c, LineCollection)]
+    main, stiff, servo = (ax for ax in fig.axes if ax.get_title())
+    assert "ZMP inside" in main.get_title() and stiff.get_title().endswith("stiff")
+    assert _found(main, FEASIBLE) and _found(main, {(2.0, 0.0), (1.0, 0.0)})
+    assert not _found(main, WALKS)
+    walked = stiff.images[0].get_array()
+    np.testing.assert_array_equal(np.asarray(walked), _field(WALKS))
+    assert _found(stiff, FEASIBLE) and not np.asarray(servo.images[0].get_array()).any()
+    assert not any(ax.texts for ax in fig.axes)
+    legend = _legend(fig)
+    assert {"paper family: a gait with the ZMP inside", "MuJoCo stiff walks (max-margin gait)",
+            "paper family: a gait with margin ≥ 5 mm"} <= legend  # fmt: skip
 
-    def found(cells) -> bool:
-        want = np.array(sorted(edges(_field(cells))))
-        for segments in drawn:
-            if len(segments) != len(want):
-                continue
-            # each line is shifted as a whole (coinciding boundaries lie side by side)
-            shift = segments.reshape(-1, 2).min(axis=0) - want.reshape(-1, 2).min(axis=0)
-            got = np.array(sorted(map(tuple, (segments - shift).round(9).tolist())))
-            if np.allclose(got, want):
-                return True
-        return False
 
-    assert found(FEASIBLE) and found(WALKS) and found({(2.0, 0.0), (1.0, 0.0)})
-    assert not found({(2.0, 0.0)})
+def test_the_papers_statements_are_marked_where_the_grid_holds_them():
+    """0.5 s flat and 15° at 1 s (nominal, inside) and 30° at 1 s (GA, outside) are cells of
+    the grid; 0.4 s and 22.5° are not and are not drawn."""
+    fig = envelope_figure(_rows())
+    main = next(ax for ax in fig.axes if ax.get_title())
+    points = [c for c in main.collections if not isinstance(c, LineCollection)]
+    where = {tuple(np.asarray(c.get_offsets())[0]) for c in points}
+    assert where == {
+        (SLOPES.index(0.0), TIMES.index(0.5)),
+        (SLOPES.index(15.0), TIMES.index(1.0)),
+        (SLOPES.index(30.0), TIMES.index(1.0)),
+    }
+    faces = {tuple(np.asarray(c.get_offsets())[0]): c.get_facecolor()[0][0] for c in points}
+    assert faces[(SLOPES.index(30.0), TIMES.index(1.0))] == 1.0  # open: the paper says outside
+    assert faces[(SLOPES.index(0.0), TIMES.index(0.5))] == 0.0  # filled: inside
+    legend = _legend(fig)
+    assert "the paper: nominal gait stable at 0.5 s" in legend
+    assert "the paper: no GA gait at 30° (nominal foot)" in legend
+    assert "the paper: GA gait inside at 22.5°" not in legend
+
+
+def test_uneven_axis_spacing_is_said():
+    fig = envelope_figure(_rows())
+    main = next(ax for ax in fig.axes if ax.get_title())
+    assert "evenly spaced, values not" in main.get_xlabel()
+    assert "evenly spaced, values not" in main.get_ylabel()
 
 
 EXTENDED_FEASIBLE = FEASIBLE | {(0.5, 0.0), (0.5, 15.0), (2.0, 30.0)}
@@ -108,13 +150,13 @@ def _two_families():
 
 def test_both_families_analytic_and_walking_boundaries_are_drawn():
     fig = envelope_figure(_two_families())
-    ax = fig.axes[0]
-    labels = {t.get_text() for t in ax.texts}
-    assert {"paper: ZMP inside", "extended: ZMP inside", "MuJoCo stiff walks"} <= labels
-    assert "extended: MuJoCo stiff walks" in labels
-    sizes = {len(c.get_segments()) for c in ax.collections if isinstance(c, LineCollection)}
-    for cells in (FEASIBLE, EXTENDED_FEASIBLE, WALKS, EXTENDED_WALKS):
-        assert len(edges(_field(cells))) in sizes
+    main, stiff = [ax for ax in fig.axes if ax.get_title()][:2]
+    assert _found(main, FEASIBLE) and _found(main, EXTENDED_FEASIBLE)
+    assert _found(stiff, EXTENDED_WALKS)  # the extended family's own walks, dashed
+    assert {"extended family: a gait with the ZMP inside",
+            "extended family: MuJoCo walks its own gait (dashed, the mode's colour)"} <= _legend(
+        fig
+    )  # fmt: skip
     _, _, g = grids(_two_families(), "extended")
     np.testing.assert_array_equal(g["feasible"], _field(EXTENDED_FEASIBLE))
     np.testing.assert_array_equal(g["walks_stiff"], _field(EXTENDED_WALKS))

@@ -149,7 +149,7 @@ class EnvelopeCell:
         from slopewalk.planner.gait_search import GaitProblem, ga_params
 
         params = ga_params(self.spec, self.step_time, self.slope, steps=self.steps)
-        return GaitProblem(self.spec, params, family=self.family)
+        return GaitProblem(self.spec, params, family=self.family, friction=self.friction)
 
     def gait(self, x):
         """The walk of GA variables ``x`` at 1 ms (``GaitParams``): (Hz, Szmax, tilt), and
@@ -190,7 +190,9 @@ class _Shifted:
         from slopewalk.planner.gait_search import Measurement
 
         m = self.inner.measure(X)
-        return Measurement(m.work, m.margin - self.required, m.joint_gap)
+        return Measurement(
+            m.work, m.margin - self.required, m.joint_gap, m.friction_gap, m.slide_gap
+        )
 
 
 def error_row(cell: EnvelopeCell, cause: str) -> dict:
@@ -252,12 +254,15 @@ def _run(cell: EnvelopeCell, record_dir: str | None, simulate: bool) -> dict:
 @dataclass(frozen=True)
 class _Pool:
     """Every individual both searches evaluated (they search the same walk): X, work,
-    true margin [m] (the min-work log's margins are shifted back) and joint gap."""
+    true margin [m] (the min-work log's margins are shifted back), joint gap [rad], and
+    the friction [-] and slide [m] gaps (``gait_search.Measurement``)."""
 
     X: np.ndarray
     work: np.ndarray
     margin: np.ndarray
     gap: np.ndarray
+    friction_gap: np.ndarray
+    slide_gap: np.ndarray
 
     @classmethod
     def of(cls, stable, cheap, required: float) -> _Pool:
@@ -267,11 +272,14 @@ class _Pool:
             np.concatenate([a["work"], b["work"]]),
             np.concatenate([a["margin"], b["margin"] + required]),
             np.concatenate([a["gap"], b["gap"]]),
+            np.concatenate([a["friction_gap"], b["friction_gap"]]),
+            np.concatenate([a["slide_gap"], b["slide_gap"]]),
         )
 
     @property
     def admissible(self) -> np.ndarray:
-        return np.isfinite(self.work) & np.isfinite(self.margin) & (self.gap <= 0)
+        contact = (self.friction_gap <= 0) & (self.slide_gap <= 0)
+        return np.isfinite(self.work) & np.isfinite(self.margin) & (self.gap <= 0) & contact
 
     def most_stable(self) -> np.ndarray:
         """Admissible individuals, largest margin first."""

@@ -24,12 +24,13 @@ from slopewalk.bench.experiments.ga.search import (
 from slopewalk.planner.errors import SlopewalkError, UnreachableError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.gait_search import (
-    MIN_CLEARANCE,
     PENALTY,
     SAMPLES_PER_STEP,
     GaitProblem,
     ga_params,
     joint_limit_excess,
+    min_knee_flexion,
+    swing_clearance,
 )
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.spec import RobotSpec
@@ -63,15 +64,17 @@ def optimize_case(
         slope: Plane inclination [rad], in (−60°, 60°).
         step_time: Step completion time [s], > 0.
         settings: GA settings (default: the paper's 130 x 500, penalty, seed 0).
-        friction: Coefficient μ of the plane, > 0, or None; the report says whether
-            the best gait's largest required |F_t|/F_n exceeds it.
+        friction: Coefficient μ of the plane, > 0, or None (1.0); the GA admits no gait
+            whose largest required |F_t|/F_n exceeds it (``GaitProblem.friction``), and
+            the report says whether the best gait's 1 ms re-plan does.
         pareto: Also run NSGA-II over (work, −min margin) with the same settings.
         progress: tqdm bars on stderr.
     """
     settings = settings if settings is not None else GaSettings()
     if friction is not None and not friction > 0:
         raise SlopewalkError(f"friction {friction!r}: must be > 0")
-    problem = GaitProblem(spec, ga_params(spec, step_time, slope))
+    mu = 1.0 if friction is None else friction
+    problem = GaitProblem(spec, ga_params(spec, step_time, slope), friction=mu)
     run = run_ga(problem, settings, progress=progress)
     front = run_nsga2(problem, settings, progress=progress) if pareto else None
     report = _report(spec, problem.params, problem, settings, run, friction)
@@ -111,7 +114,9 @@ def _report(spec, params: GaitParams, problem, settings, run: RunResult, frictio
             "hip_height_m": [b.lower[0], b.upper[0]],
             "swing_lift_m": [b.lower[1], b.upper[1]],
             "tilt_deg": [float(np.rad2deg(b.lower[2])), float(np.rad2deg(b.upper[2]))],
-            "min_clearance_m": MIN_CLEARANCE,
+            "min_clearance_m": swing_clearance(spec),
+            "min_knee_flexion_rad": min_knee_flexion(spec),
+            "friction": problem.friction,
         },
         "feasible": best.feasible,
         "best": {

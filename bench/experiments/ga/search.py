@@ -112,12 +112,15 @@ class GaSettings:
 
 @dataclass
 class _Log:
-    """Every individual evaluated in a run, in order (X, work, margin, joint gap, F, CV)."""
+    """Every individual evaluated in a run, in order (X, work, margin, joint gap, friction
+    gap, slide gap, F, CV; ``gait_search.Measurement``)."""
 
     X: list = field(default_factory=list)
     work: list = field(default_factory=list)
     margin: list = field(default_factory=list)
     gap: list = field(default_factory=list)
+    friction_gap: list = field(default_factory=list)
+    slide_gap: list = field(default_factory=list)
     F: list = field(default_factory=list)
     cv: list = field(default_factory=list)
 
@@ -126,12 +129,15 @@ class _Log:
         self.work.append(m.work)
         self.margin.append(m.margin)
         self.gap.append(m.joint_gap)
+        self.friction_gap.append(m.friction_gap)
+        self.slide_gap.append(m.slide_gap)
         self.F.append(F)
         self.cv.append(cv)
 
     def arrays(self) -> dict:
         return {
-            k: np.concatenate(getattr(self, k)) for k in ("X", "work", "margin", "gap", "F", "cv")
+            k: np.concatenate(getattr(self, k))
+            for k in ("X", "work", "margin", "gap", "friction_gap", "slide_gap", "F", "cv")
         }
 
 
@@ -140,7 +146,7 @@ class _PymooProblem(Problem):
 
     def __init__(self, problem, mode: str):
         self.inner, self.mode, self.log = problem, mode, _Log()
-        n_constr = {"penalty": 0, "margin": 2, "stability": 1, "pareto": 1}[mode]
+        n_constr = {"penalty": 0, "margin": 4, "stability": 3, "pareto": 3}[mode]
         n_obj = 2 if mode == "pareto" else 1
         b = problem.bounds
         super().__init__(n_var=b.xl.size, n_obj=n_obj, n_ieq_constr=n_constr, xl=b.xl, xu=b.xu)
@@ -186,7 +192,8 @@ class RunResult:
         evaluations: Individuals planned. wall_s: Wall time of the search [s].
         history: Best objective so far after each generation (or batch), shape (G,).
         feasible_history: Whether a feasible gait had been found by then, shape (G,).
-        log: Every evaluated individual (keys X, work, margin, gap, F, cv).
+        log: Every evaluated individual (keys X, work, margin, gap, friction_gap,
+            slide_gap, F, cv).
     """
 
     best: Best
@@ -204,7 +211,8 @@ class RunResult:
 def _feasible(log: dict) -> np.ndarray:
     """Admissible, ZMP inside and no constraint violated, per logged individual."""
     ok = np.isfinite(log["work"]) & np.isfinite(log["margin"])
-    return ok & (log["margin"] >= 0) & (log["gap"] <= 0) & (log["cv"] <= 0)
+    contact = (log["friction_gap"] <= 0) & (log["slide_gap"] <= 0)
+    return ok & (log["margin"] >= 0) & (log["gap"] <= 0) & contact & (log["cv"] <= 0)
 
 
 def _best_index(log: dict) -> int:
