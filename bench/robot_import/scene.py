@@ -14,7 +14,11 @@ never changes what is there:
   joint's sign (the numeric ``slopewalk_joint_sign``), so the recording is in the
   planner's convention;
 * for a joint (mapped or held) that no position actuator of the model drives (a model
-  with motors only), a position servo from the spec's [servo] table.
+  with motors only), a position servo from the spec's [servo] table, as the twin's
+  (``model.servo_settings``): kp, kv and the torque limit on the actuator, and the
+  motor's rotor added to its joint's own (armature, back-EMF damping = stall torque / no-load speed,
+  friction loss). Without the rotor, kv acts explicitly under a model's own Euler
+  integrator and chatters on light links (a URDF's 0.04 kg ankle cross).
 
 The playback's 8 commands (MJCF order, planner signs) become the model's controls
 through ``controls``: a mapped joint's position actuator gets sign × its command, a
@@ -125,6 +129,14 @@ class ModelScene:
             act.set_to_position(kp=spec.stiffness, kv=spec.velocity_gain)
             act.forcelimited = True
             act.forcerange = [-spec.stall_torque, spec.stall_torque]
+            motor = mjs.joint(joint)  # the rotor adds to the joint's own (URDF <dynamics>)
+            motor.armature += spec.armature
+            damping = spec.stall_torque / spec.no_load_speed  # back-EMF (``servo_settings``)
+            if np.ndim(motor.damping):  # MuJoCo 4: polynomial coefficients; 3.x: a number
+                motor.damping = np.asarray(motor.damping) + [damping, 0.0, 0.0]
+            else:
+                motor.damping += damping
+            motor.frictionloss += spec.friction_loss
 
     def _add_sites(self, mjs: mujoco.MjSpec) -> None:
         """Sole point and spec-aligned axes on each foot; the spec's pelvis frame on the base."""
