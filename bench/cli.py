@@ -98,13 +98,18 @@ def _robot_parser(sub) -> None:
     p = _command(
         sub,
         "robot",
-        "import an MJCF or URDF humanoid as a robot spec",
+        "import an MJCF or URDF humanoid as a robot spec; compare it with its twin",
         "Bring your own robot (docs/importing-robots.md). `robot import MODEL` compiles "
         "the MJCF or URDF with MuJoCo, finds both legs' hip pitch, knee, ankle pitch and "
         "ankle roll, checks that they fit the planner (or refuses in one line naming the "
-        "joint and the misfit) and writes a robot spec with a report of every approximation.",
+        "joint and the misfit) and writes a robot spec with a report of every approximation. "
+        "`robot compare MODEL` plays one plan on the spec's twin and on the unmodified model "
+        "(held joints as actuated and welded, its own contact options and the twin's), side "
+        "by side.",
         "slopewalk robot import humanoid.xml --out humanoid.toml",
         "slopewalk robot import robot.urdf --map robot-map.toml --out robot.toml",
+        "slopewalk robot compare robot.urdf --map robot-map.toml --step-time 3 --tilt 9 "
+        "--steps 2 --out compare.md",
     )
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     imp = actions.add_parser("import", help="write the robot spec of an MJCF or URDF model")
@@ -112,6 +117,21 @@ def _robot_parser(sub) -> None:
     imp.add_argument("--map", metavar="MAP.toml", help="names what detection cannot decide")
     imp.add_argument("--out", metavar="SPEC.toml", help="output spec (default: stdout)")
     imp.set_defaults(run=commands.robot_import)
+    cmp = actions.add_parser(
+        "compare",
+        help="play one plan on the twin and on the unmodified model, side by side",
+        description="Plan on the imported spec (--robot's, default: imported now) and play "
+        "the plan open loop on the twin, on the unmodified model, on the model with its held "
+        "joints welded, with the twin's contact options, and with both: a markdown table "
+        "of CoP-ZMP RMS, pelvis RMS, footprints and verdicts (docs/importing-robots.md).",
+    )
+    cmp.add_argument("model", metavar="MODEL", help="the robot's MJCF (.xml) or URDF (.urdf)")
+    cmp.add_argument("--map", metavar="MAP.toml", help="names what detection cannot decide")
+    add_gait_flags(cmp)
+    add_sim_flags(cmp)
+    cmp.set_defaults(actuators="servo_ff")  # a model plays on its own servos
+    cmp.add_argument("--out", metavar="REPORT.md", help="also write the report here")
+    cmp.set_defaults(run=commands.robot_compare)
 
 
 def _model_flags(p) -> None:

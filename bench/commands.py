@@ -12,6 +12,7 @@ import argparse
 import contextlib
 import json
 import os
+import shlex
 import stat
 import sys
 from typing import TYPE_CHECKING
@@ -123,6 +124,33 @@ def robot_import(args: argparse.Namespace) -> None:
     print(f"wrote {args.out}: the robot spec of {args.model}; approximations:")
     for note in notes:
         print(f"  {note}")
+
+
+def robot_compare(args: argparse.Namespace) -> None:
+    from slopewalk.bench.experiments.model_compare import compare_model, report
+    from slopewalk.bench.robot_import.scene import model_scene
+    from slopewalk.bench.sim.trial import trial_checked
+    from slopewalk.bench.sim.trial_spec import TrialSpec
+    from slopewalk.planner.spec import load_spec
+
+    if args.out:
+        check_output(args.out)
+    spec = load_spec(args.robot) if args.robot is not None else None
+    scene = model_scene(args.model, args.map, spec)
+    trial = TrialSpec(
+        gait_from_args(args, scene.spec), friction=args.friction, actuators=args.actuators
+    )
+    plan = trial_checked(scene.spec, trial)
+    # a mode the model cannot play (its own servos) is refused before any trial runs
+    scene.build(plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep)
+    rows = compare_model(scene, trial, plan)
+    command = "slopewalk " + shlex.join(sys.argv[1:])
+    text = report(rows, scene=scene, trial=trial, plan=plan, command=command)
+    print(text, end="")
+    if args.out:
+        with atomic_paths(args.out) as (tmp,):
+            tmp.write_text(text)
+        print(f"wrote {args.out}")
 
 
 def trial(args: argparse.Namespace) -> None:

@@ -14,7 +14,11 @@ never changes what is there:
   joint's sign (the numeric ``slopewalk_joint_sign``), so the recording is in the
   planner's convention;
 * for a joint (mapped or held) that no position actuator of the model drives (a model
-  with motors only), a position servo from the spec's [servo] table.
+  with motors only), a position servo from the spec's [servo] table, as the twin's
+  (``model.servo_settings``): kp, kv and the torque limit on the actuator, and the
+  motor's rotor added to its joint's own (armature, back-EMF damping = stall torque / no-load speed,
+  friction loss). Without the rotor, kv acts explicitly under a model's own Euler
+  integrator and chatters on light links (a URDF's 0.04 kg ankle cross).
 
 The playback's 8 commands (MJCF order, planner signs) become the model's controls
 through ``controls``: a mapped joint's position actuator gets sign × its command, a
@@ -37,7 +41,7 @@ from slopewalk.bench.robot_import.fit import BaseFrame, Fit, fit_model, posed
 from slopewalk.bench.robot_import.mapfile import SIDES, load_map
 from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
 from slopewalk.bench.sim.floor import SoftFloor
-from slopewalk.bench.sim.model import SceneError, mujoco_message, servo_settings
+from slopewalk.bench.sim.model import IMPRATIO, SceneError, mujoco_message, servo_settings
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX
 from slopewalk.planner.kinematics import Chain, rotation_slope_to_world
@@ -57,10 +61,17 @@ class ModelScene:
     Attributes:
         fit: The model fitted to the planner (``fit.fit_model``).
         spec: The imported spec (the plan's robot).
+        welded: Weld each held joint at its angle (a joint equality constraint as stiff as
+            the step allows, solref 2 steps, critically damped): the held joints as rigid
+            as the planner takes them, for ``robot compare``; False: held by actuators.
+        twin_contact: Play on the twin's contact options (elliptic cone, impratio 10)
+            instead of the model's own, for ``robot compare``.
     """
 
     fit: Fit
     spec: RobotSpec
+    welded: bool = False
+    twin_contact: bool = False
 
     @property
     def name(self) -> str:
@@ -94,6 +105,11 @@ class ModelScene:
         if not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in base.joints):
             base.add_freejoint()
         self._add_servos(mjs)
+        if self.welded:
+            self._weld_held(mjs, timestep)
+        if self.twin_contact:
+            mjs.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+            mjs.option.impratio = IMPRATIO
         self._add_sites(mjs)
         self._add_sensors(mjs)
         mjs.add_numeric(name=JOINT_SIGN, data=[sign for _, sign in self.joints()])
@@ -125,6 +141,27 @@ class ModelScene:
             act.set_to_position(kp=spec.stiffness, kv=spec.velocity_gain)
             act.forcelimited = True
             act.forcerange = [-spec.stall_torque, spec.stall_torque]
+            motor = mjs.joint(joint)  # the rotor adds to the joint's own (URDF <dynamics>)
+            motor.armature += spec.armature
+            damping = spec.stall_torque / spec.no_load_speed  # back-EMF (``servo_settings``)
+            if np.ndim(motor.damping):  # MuJoCo 4: polynomial coefficients; 3.x: a number
+                motor.damping = np.asarray(motor.damping) + [damping, 0.0, 0.0]
+            else:
+                motor.damping += damping
+            motor.frictionloss += spec.friction_loss
+
+    def _weld_held(self, mjs: mujoco.MjSpec, timestep: float) -> None:
+        """A joint equality per held joint: q = its held angle (``welded``)."""
+        qpos0 = self.fit.model.qpos0
+        for name, angle in self.fit.held.items():
+            weld = mjs.add_equality(
+                name=f"slopewalk_weld_{name}", type=mujoco.mjtEq.mjEQ_JOINT, name1=name,
+                objtype=_OBJ.mjOBJ_JOINT,
+            )  # fmt: skip
+            data = np.zeros(len(weld.data))  # joint1 alone: q − q0 = data[0]
+            data[0] = angle - qpos0[self.fit.model.joint(name).qposadr[0]]
+            weld.data = data
+            weld.solref = [2 * timestep, 1.0]
 
     def _add_sites(self, mjs: mujoco.MjSpec) -> None:
         """Sole point and spec-aligned axes on each foot; the spec's pelvis frame on the base."""
