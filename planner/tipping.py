@@ -324,7 +324,7 @@ def rocking(
                 v = min(v, 0.0) if x > 0 else max(v, 0.0)
                 if x == 0.0:
                     v = 0.0
-        x = float(np.clip(x, -FALLEN, FALLEN))
+        x = min(max(float(x), -FALLEN), FALLEN)  # np.clip on a scalar: 6 µs a sample
         theta[k] = x + (give if x != 0.0 or v != 0.0 else flat_give[k])
     return theta
 

@@ -185,6 +185,26 @@ def linearised(chain, gravity, q, qd, qdd, side, sole, share, step):
     return tau, mass, stiff, vel, jac
 
 
+@njit(**_KW)
+def rows(chain, gravity, q, qd, qdd, side, sole, share):
+    """A plan's rows (``sample`` layout, (n, ``sample.ROW``)) at the given joint motion.
+
+    ``compliance._Dynamics.plan_of``'s torques, ZMP, CoM, swing sole and ground forces
+    (``sample.write_rows``); its Q (IK) rows, polygon and margin are not computed here
+    (the caller keeps the given q and the plan's polygon).
+    Arguments as ``torques``.
+    """
+    n = q.shape[0]
+    out = np.empty((n, sp.ROW))
+    w = np.zeros(sp.SCRATCH)  # rows write_rows reads but no pass fills (IK) stay 0
+    for start in range(0, n, B):
+        m = min(B, n - start)
+        _load(q, qd, qdd, side, sole, share, start, m, w)
+        _pass(chain, gravity, m, w)
+        sp.write_rows(chain[3], gravity, m, w, out, np.arange(start, start + m))
+    return out
+
+
 def plan_inputs(plan) -> tuple:
     """(chain, gravity, side, sole, share) of ``plan`` for ``torques`` and ``linearised``.
 

@@ -38,6 +38,7 @@ import numpy as np
 from numba import njit, prange
 
 from slopewalk.planner.joints import JOINT_KINDS
+from slopewalk.planner.kernel import cache
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel import tables as tb
 from slopewalk.planner.kinematics import gravity_in_slope
@@ -330,8 +331,11 @@ class KernelWalk:
         ``tables.GaitTable.individuals`` reads it.
         """
         X = self.gait.individuals(X)
+        cache.first_use("plan")
         with _LAUNCH:
-            return series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
+            out = series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
+        cache.compiled("plan")
+        return out
 
     def scores(self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False):
         """(work [J], min margin [m], joint gap [rad]), each (P,); see ``scores``.
@@ -345,10 +349,12 @@ class KernelWalk:
         X = self.gait.individuals(X)
         pieces, times = self.limit if samples == "limit" else self.grid
         blocks = self.limit_blocks if samples == "limit" else self.grid_blocks
+        cache.first_use("scores")
         with _LAUNCH:
             out = scores(
                 *self._args(slope), self.limits, X, pieces, times, *_fields(blocks), refine
             )  # fmt: skip
+        cache.compiled("scores")
         return out if counts else out[:3]
 
 
