@@ -125,6 +125,11 @@ _EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile
 NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
 
 
+def cold_seconds(*names: str) -> float:
+    """The compile time [s] of the entries of ``names`` whose code is not cached."""
+    return sum(ENTRIES[n].seconds for n in names if not ENTRIES[n].mark().exists())
+
+
 def expect(*names: str) -> None:
     """The entries the running command compiles, for ``first_use``'s one line (the CLI)."""
     _EXPECTED[0] = names
@@ -145,7 +150,7 @@ def first_use(name: str) -> None:
         return
     names = set(_EXPECTED[0]) | {name}
     _WARM.update(names)  # the line covers the command's other entries
-    seconds = sum(ENTRIES[n].seconds for n in names if not ENTRIES[n].mark().exists())
+    seconds = cold_seconds(*names)
     notice = entry.mark().with_suffix(".notice")
     try:
         notice.parent.mkdir(parents=True, exist_ok=True)
