@@ -13,7 +13,7 @@ the first plan and the first population score in a fresh process with an empty
 numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same first
 calls in a fresh process once that cache is filled; ``cached_process_s``: that
 whole process, interpreter and imports included; ``compile_<entry>_s`` each entry
-point alone in an empty cache (``entry_compile_figures``).
+point alone in an empty cache (``entry_compiles``).
 
 ``controller``: closed-loop steps/s (numpy controller through ``slopewalk.bench.sim.env``)
 vs the open-loop rollout's on the nominal trial (``controller_figures``).
@@ -127,14 +127,14 @@ print(json.dumps({"s": time.perf_counter() - wall, "cpu_s": time.process_time() 
 """
 
 
-def entry_compile_figures() -> dict:
+def entry_compiles() -> dict[str, dict]:
     """Each entry point's first call, in a fresh process with its own empty numba cache.
 
-    ``compile_<entry>_s`` (wall) and ``compile_<entry>_cpu_s`` (that process's CPU time,
-    which moves less with other jobs' load): the plan (``plan_walk``), the GA's scores
-    (``evaluate``) and a trial (``run_trial``: the plan and the trial's predictors), each
-    compiling only what it calls; ``warm_trial_s``: the trial's call again in a fresh
-    process once its cache is filled.
+    Per entry ("plan": ``plan_walk``, "scores": the GA's ``evaluate``, "trial":
+    ``run_trial``, the plan and the trial's predictors), each compiling only what it
+    calls: ``s`` (wall) and ``cpu_s`` (that process's CPU time, which moves less with
+    other jobs' load); the trial also ``warm_s``, its call again in a fresh process
+    once its cache is filled.
     """
     out = {}
     for name, call in _ENTRY_CALLS.items():
@@ -153,10 +153,7 @@ def entry_compile_figures() -> dict:
                 )
                 for _ in range(2 if name == "trial" else 1)
             ]
-        out[f"compile_{name}_s"] = runs[0]["s"]
-        out[f"compile_{name}_cpu_s"] = runs[0]["cpu_s"]
-        if name == "trial":
-            out["warm_trial_s"] = runs[1]["s"]
+        out[name] = dict(runs[0], warm_s=runs[-1]["s"])
     return out
 
 
@@ -166,7 +163,7 @@ def planner_figures() -> dict:
     with tempfile.TemporaryDirectory() as cache:
         cold, _ = _fresh_process(cache)
         warm, warm_wall = _fresh_process(cache)
-    entries = entry_compile_figures()
+    entries = entry_compiles()
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
     plan_walk(spec, params)
@@ -198,7 +195,13 @@ def planner_figures() -> dict:
         "compile_s": cold["first_calls_s"],
         "cached_start_s": warm["first_calls_s"],
         "cached_process_s": warm_wall,
-        **entries,
+        "compile_plan_s": entries["plan"]["s"],
+        "compile_plan_cpu_s": entries["plan"]["cpu_s"],
+        "compile_scores_s": entries["scores"]["s"],
+        "compile_scores_cpu_s": entries["scores"]["cpu_s"],
+        "compile_trial_s": entries["trial"]["s"],
+        "compile_trial_cpu_s": entries["trial"]["cpu_s"],
+        "warm_trial_s": entries["trial"]["warm_s"],
         "load_1min": os.getloadavg()[0],
     }
 
