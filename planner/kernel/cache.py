@@ -114,10 +114,12 @@ class Entry:
         return root / "compiled" / f"{self.name}-{hashlib.sha256(keys.encode()).hexdigest()[:16]}"
 
 
-ENTRIES = {  # cold compile CPU s measured on the 2-core machine (docs/benchmark.md)
-    "plan": Entry("plan", ("run",), 30.0),  # a plan's series (run.series)
-    "scores": Entry("scores", ("run",), 43.0),  # a GA population's scores (run.scores)
-    "predictors": Entry("predictors", ("dynamics", "servo"), 28.0),  # a trial's servo loop
+# cold compile CPU s on the 2-core machine at load ~1.6 (docs/benchmark.md, compile_*_cpu_s:
+# a plan 21 s, a trial 43 s, its first calls' own work ~2 s each left out)
+ENTRIES = {
+    "plan": Entry("plan", ("run",), 20.0),  # a plan's series (run.series)
+    "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
+    "predictors": Entry("predictors", ("dynamics", "servo"), 21.0),  # a trial's servo loop
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process

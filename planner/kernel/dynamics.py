@@ -61,7 +61,9 @@ def _pass(chain, gravity, n, w):
     geometry, dh_a, d5, mass, com, inertia = chain
     sp._kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
     sp._outward(com, inertia, gravity, n, w)
-    sp._inward(mass, True, n, w)
+    # double support as the int a ``tables.Blocks`` holds (a literal True would compile a
+    # second ``_inward``, seconds of compiling for the same code)
+    sp._inward(mass, 1 + 0 * n, n, w)
 
 
 @njit(**_KW)
