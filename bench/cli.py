@@ -563,6 +563,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# The kernel entries (planner/kernel/cache.py) each command compiles on first use.
+_TRIAL = ("plan", "predictors")
+COMPILES = {
+    "plan": ("plan",),
+    "trial": _TRIAL,
+    "sweep": _TRIAL,
+    "controllers": _TRIAL,
+    "compare": _TRIAL,
+    "cop_error": _TRIAL,
+    "optimize": ("scores", "plan"),
+    "envelope": ("scores", *_TRIAL),
+}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``slopewalk`` command; returns the exit status (2 for refused input, 130
     for Ctrl-C, 141 when its output pipe was closed: ``_output_closed``)."""
@@ -588,6 +602,11 @@ def _main(argv: list[str]) -> int:
         parser.print_help(sys.stderr)
         return 2
     args = parser.parse_args(argv)
+    entries = COMPILES.get(args.run.__name__)
+    if entries:  # the kernel's first-use line sums what the command compiles
+        from slopewalk.planner.kernel import cache
+
+        cache.expect(*entries)
     try:
         args.run(args)
     except SlopewalkError as err:

@@ -98,7 +98,7 @@ def compliant_walk(
     else:
         delta, iterations, change = _fixed_point(dynamics, plan, rate_terms, stiffness)
     converged = bool(change < TOLERANCE)
-    walk = dynamics.plan_of(plan.q + delta, qd, qdd)
+    walk = dynamics.plan_of(plan.q + delta, qd, qdd, compiled=compiled)
     loop = -stiffness * delta - velocity_gain * qd + tau_ff
     return CompliantWalk(walk, -delta, iterations, converged, loop)
 
@@ -120,8 +120,9 @@ def _fixed_point(dynamics, plan, rate_terms, stiffness):
 
 def _fixed_point_compiled(plan, rate_terms, stiffness):
     """``_fixed_point`` on the compiled kernel (``kernel.servo.fixed_point``)."""
-    from slopewalk.planner.kernel import dynamics, servo
+    from slopewalk.planner.kernel import cache, dynamics, servo
 
+    cache.first_use("predictors")
     chain, gravity, side, sole, share = dynamics.plan_inputs(plan)
     q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (plan.q, plan.qd, plan.qdd))
     terms = np.ascontiguousarray(rate_terms, dtype=float)
@@ -156,7 +157,13 @@ class _Dynamics:
     def torque(self, q, qd, qdd):
         return self._solve(q, qd, qdd)[1]
 
-    def plan_of(self, q, qd, qdd) -> Plan:
+    def plan_of(self, q, qd, qdd, *, compiled: bool = False) -> Plan:
+        """``self.base`` at joint motion (q, q̇, q̈): its torques, ZMP, CoM and forces.
+
+        compiled: on the compiled kernel (``kernel.dynamics.rows``); False: numpy.
+        """
+        if compiled:
+            return self._plan_of_compiled(q, qd, qdd)
         dyn, tau, swing_force, swing_sole = self._solve(q, qd, qdd)
         mass = self.chain.mass
         zmp = zmp_multibody(mass, dyn.com, dyn.com_acc, dyn.momentum_rate, self.gravity)
@@ -179,4 +186,35 @@ class _Dynamics:
             stance_force=ground - swing_force,
             swing_force=swing_force,
             friction_ratio=friction_ratio(ground),
+        )
+
+    def _plan_of_compiled(self, q, qd, qdd) -> Plan:
+        """``plan_of`` on the compiled kernel; the margin on the plan's own polygon."""
+        from slopewalk.planner.kernel import dynamics
+        from slopewalk.planner.kernel import sample as sm
+
+        chain, gravity, side, sole, share = dynamics.plan_inputs(self.base)
+        q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (q, qd, qdd))
+        rows = dynamics.rows(chain, gravity, q, qd, qdd, side, sole, share)
+
+        def cols(start, width):
+            return np.ascontiguousarray(rows[:, start : start + width])
+
+        zmp = cols(sm.ZMP, 2)
+        return replace(
+            self.base,
+            q=q,
+            qd=qd,
+            qdd=qdd,
+            tau=cols(sm.TAU, 8),
+            zmp=zmp,
+            zmp_lipm=cols(sm.ZMP_LIPM, 2),
+            com=cols(sm.COM, 3),
+            com_acc=cols(sm.COM_ACC, 3),
+            swing_sole=cols(sm.SWING_SOLE, 3),
+            margin=signed_margin(zmp, self.base.polygon),
+            ground_force=cols(sm.GROUND, 3),
+            stance_force=cols(sm.STANCE_FORCE, 3),
+            swing_force=cols(sm.SWING_FORCE, 3),
+            friction_ratio=rows[:, sm.FRICTION].copy(),
         )

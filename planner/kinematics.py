@@ -98,6 +98,9 @@ def gravity_in_slope(slope: float, g: float = GRAVITY) -> np.ndarray:
     return rotation_slope_to_world(slope).T @ np.array([0.0, 0.0, -g])
 
 
+_CHAINS: dict[int, tuple[RobotSpec, Chain]] = {}  # Chain.from_spec's memory, by spec identity
+
+
 @dataclass(frozen=True)
 class Chain:
     """The DH chain and link inertials of one robot, for either stance leg.
@@ -127,6 +130,22 @@ class Chain:
 
     @classmethod
     def from_spec(cls, spec: RobotSpec) -> Chain:
+        """The chain of ``spec``, remembered for the last few specs (a RobotSpec is frozen;
+        the arrays are read-only): a trial asks for it ~9 times, 1.3 ms each."""
+        hit = _CHAINS.get(id(spec))
+        if hit is not None and hit[0] is spec:
+            return hit[1]
+        chain = cls._build(spec)
+        for value in vars(chain).values():
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+        if len(_CHAINS) >= 8:
+            _CHAINS.pop(next(iter(_CHAINS)))
+        _CHAINS[id(spec)] = (spec, chain)
+        return chain
+
+    @classmethod
+    def _build(cls, spec: RobotSpec) -> Chain:
         a = np.array([0, 0, spec.shank, spec.thigh, 0, spec.thigh, spec.shank, 0], dtype=float)
         alpha = np.array([0, -np.pi / 2, 0, 0, 0, 0, 0, np.pi / 2])
         d = np.zeros((2, N_JOINTS))

@@ -221,14 +221,19 @@ def servo_walk(
         args = args[:-1] + (jac,)
         delta, rate, accel, loop, finite = _integrate(*args, gains, d)
     dyn = _Dynamics(plan)
-    walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel)
+    walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel, compiled=compiled)
+    if compiled:
+        from slopewalk.planner.kernel import cache
+
+        cache.compiled("predictors")
     return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop)
 
 
 def _linearised_compiled(plan: Plan):
     """``linearised`` and ``support_jacobian`` on the compiled kernel (``kernel.dynamics``)."""
-    from slopewalk.planner.kernel import dynamics
+    from slopewalk.planner.kernel import cache, dynamics
 
+    cache.first_use("predictors")
     chain, gravity, side, sole, share = dynamics.plan_inputs(plan)
     q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (plan.q, plan.qd, plan.qdd))
     return dynamics.linearised(chain, gravity, q, qd, qdd, side, sole, share, STEP)

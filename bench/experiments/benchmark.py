@@ -12,7 +12,8 @@ population in the same run, and ``speedup`` of the kernel over it. ``compile_s``
 the first plan and the first population score in a fresh process with an empty
 numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same first
 calls in a fresh process once that cache is filled; ``cached_process_s``: that
-whole process, interpreter and imports included.
+whole process, interpreter and imports included; ``compile_<entry>_s`` each entry
+point alone in an empty cache (``entry_compiles``).
 
 ``controller``: closed-loop steps/s (numpy controller through ``slopewalk.bench.sim.env``)
 vs the open-loop rollout's on the nominal trial (``controller_figures``).
@@ -102,12 +103,67 @@ def _fresh_process(cache: str) -> tuple[dict, float]:
     return json.loads(out.stdout), time.perf_counter() - start
 
 
+# One entry point's first call in a fresh process (``entry_compile_figures``): the kernel
+# code it compiles (planner/kernel/cache.py ENTRIES) and nothing else.
+_ENTRY_CALLS = {
+    "plan": "plan_walk(spec, GaitParams.nominal(spec, 1.0))",
+    "scores": (
+        "evaluate(spec, GaitParams.nominal(spec, 1.0, dt=0.01), np.array([[0.2, 0.06, 0.2]]))"
+    ),
+    "trial": "run_trial(spec, TrialSpec(GaitParams.nominal(spec, 1.0)))",
+}
+_ENTRY = """
+import json, time
+import numpy as np
+from slopewalk.planner.plan import evaluate, plan_walk
+from slopewalk.planner.spec import load_spec
+from slopewalk.planner.gait import GaitParams
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+spec = load_spec()
+wall, cpu = time.perf_counter(), time.process_time()
+CALL
+print(json.dumps({"s": time.perf_counter() - wall, "cpu_s": time.process_time() - cpu}))
+"""
+
+
+def entry_compiles() -> dict[str, dict]:
+    """Each entry point's first call, in a fresh process with its own empty numba cache.
+
+    Per entry ("plan": ``plan_walk``, "scores": the GA's ``evaluate``, "trial":
+    ``run_trial``, the plan and the trial's predictors), each compiling only what it
+    calls: ``s`` (wall) and ``cpu_s`` (that process's CPU time, which moves less with
+    other jobs' load); the trial also ``warm_s``, its call again in a fresh process
+    once its cache is filled.
+    """
+    out = {}
+    for name, call in _ENTRY_CALLS.items():
+        code = _ENTRY.replace("CALL", call)
+        with tempfile.TemporaryDirectory() as cache:
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+            runs = [
+                json.loads(
+                    subprocess.run(
+                        [sys.executable, "-c", code],
+                        env=env,
+                        capture_output=True,
+                        text=True,
+                        check=True,
+                    ).stdout  # fmt: skip
+                )
+                for _ in range(2 if name == "trial" else 1)
+            ]
+        out[name] = dict(runs[0], warm_s=runs[-1]["s"])
+    return out
+
+
 def planner_figures() -> dict:
     import numba
 
     with tempfile.TemporaryDirectory() as cache:
         cold, _ = _fresh_process(cache)
         warm, warm_wall = _fresh_process(cache)
+    entries = entry_compiles()
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
     plan_walk(spec, params)
@@ -139,6 +195,13 @@ def planner_figures() -> dict:
         "compile_s": cold["first_calls_s"],
         "cached_start_s": warm["first_calls_s"],
         "cached_process_s": warm_wall,
+        "compile_plan_s": entries["plan"]["s"],
+        "compile_plan_cpu_s": entries["plan"]["cpu_s"],
+        "compile_scores_s": entries["scores"]["s"],
+        "compile_scores_cpu_s": entries["scores"]["cpu_s"],
+        "compile_trial_s": entries["trial"]["s"],
+        "compile_trial_cpu_s": entries["trial"]["cpu_s"],
+        "warm_trial_s": entries["trial"]["warm_s"],
         "load_1min": os.getloadavg()[0],
     }
 
@@ -306,7 +369,9 @@ def sweep_figures() -> dict:
     decoding, comparison, the table and idle workers at the end of the sweep.
     On a machine shared with other jobs the wall-time figures move with their
     load; ``cpu_fraction_of_raw`` (steps per CPU second of the sweep, workers
-    and parent, over the raw steps per CPU second) moves less.
+    and parent, over the raw steps per CPU second) moves less. ``first_estimate_s``:
+    what the sweep's first line says it will take (``sweep.run.first_estimate_s``),
+    and the wall time and the CPU time per worker over it.
     """
     import os
     import resource
@@ -331,6 +396,9 @@ def sweep_figures() -> dict:
         )
         return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
+    from slopewalk.bench.experiments.sweep.run import first_estimate_s
+
+    estimate = first_estimate_s(config.trials.simulated_steps(), workers)
     before = capacity()
     with tempfile.TemporaryDirectory() as out:
         start, start_cpu = time.perf_counter(), cpu_s()
@@ -352,6 +420,9 @@ def sweep_figures() -> dict:
         "cpu_s": cpu,
         "raw_steps_per_cpu_s": raw_cpu,
         "cpu_fraction_of_raw": summary.sim_steps / cpu / raw_cpu,
+        "first_estimate_s": estimate,
+        "wall_over_estimate": wall / estimate,
+        "cpu_over_estimate": cpu / workers / estimate,
     }
 
 

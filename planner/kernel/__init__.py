@@ -14,12 +14,10 @@ through time and the compliance fixed point on them (the per-trial predictors of
 Compiled code is cached (``cache=True``) in the user's cache directory, never in
 the source tree, so the package works from a read-only install: unless the user
 has set ``NUMBA_CACHE_DIR`` it is set here, before numba is first imported, to
-``$XDG_CACHE_HOME/slopewalk/numba/<sources>`` (``~/.cache/slopewalk/numba/…`` by
-default), or to a per-user folder under the temp directory if that one cannot be
-written. ``<sources>`` is a hash of the kernel's source files: numba checks only the
-timestamp of the file a cached function is defined in, not of the functions it
-calls from other files, so a changed ``sample.py`` must never meet a cached
-``run.py`` compiled against the old one.
+``$XDG_CACHE_HOME/slopewalk/numba`` (``~/.cache/slopewalk/numba`` by default), or
+to a per-user folder under the temp directory if that one cannot be written. Each
+kernel module is cached under a key of its own source and its kernel imports'
+(``cache``), so an edit recompiles only the modules that see it.
 
 The parallel kernels run on numba's OpenMP threading layer. GNU OpenMP's threads
 spin after each parallel region before they sleep, and a GA calls the kernel once
@@ -33,47 +31,21 @@ worker costs microseconds per kernel call, which take milliseconds.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import sys
-import tempfile
-from pathlib import Path
 
-_SOURCES = ("tables.py", "sample.py", "run.py", "dynamics.py", "servo.py")
-
-
-def sources_hash() -> str:
-    """Short hash of the kernel's source files (names the cache folder)."""
-    digest = hashlib.sha256()
-    for name in _SOURCES:
-        digest.update((Path(__file__).parent / name).read_bytes())
-    return digest.hexdigest()[:16]
-
-
-def cache_dir() -> Path:
-    """Where the compiled kernel is cached when ``NUMBA_CACHE_DIR`` is not set."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "slopewalk" / "numba" / sources_hash()
-
-
-def _writable(path: Path) -> bool:
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=path):
-            pass
-    except OSError:
-        return False
-    return True
+from slopewalk.planner.kernel.location import default_dir
 
 
 def _set_cache_dir() -> None:
     if os.environ.get("NUMBA_CACHE_DIR") or "numba" in sys.modules:
         return  # the user's choice (or a numba already configured) wins
-    path = cache_dir()
-    if not _writable(path):
-        path = Path(tempfile.gettempdir()) / f"slopewalk-numba-{os.getuid()}" / sources_hash()
-    os.environ["NUMBA_CACHE_DIR"] = str(path)
+    os.environ["NUMBA_CACHE_DIR"] = str(default_dir())
 
 
 _set_cache_dir()
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
+from slopewalk.planner.kernel import cache  # noqa: E402  (numba, configured above)
+
+cache.install()

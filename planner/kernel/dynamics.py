@@ -61,7 +61,9 @@ def _pass(chain, gravity, n, w):
     geometry, dh_a, d5, mass, com, inertia = chain
     sp._kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
     sp._outward(com, inertia, gravity, n, w)
-    sp._inward(mass, True, n, w)
+    # double support as the int a ``tables.Blocks`` holds (a literal True would compile a
+    # second ``_inward``, seconds of compiling for the same code)
+    sp._inward(mass, 1 + 0 * n, n, w)
 
 
 @njit(**_KW)
@@ -183,6 +185,26 @@ def linearised(chain, gravity, q, qd, qdd, side, sole, share, step):
             for j in range(m):
                 w[row_d + j] = qd[start + j, jj]
     return tau, mass, stiff, vel, jac
+
+
+@njit(**_KW)
+def rows(chain, gravity, q, qd, qdd, side, sole, share):
+    """A plan's rows (``sample`` layout, (n, ``sample.ROW``)) at the given joint motion.
+
+    ``compliance._Dynamics.plan_of``'s torques, ZMP, CoM, swing sole and ground forces
+    (``sample.write_rows``); its Q (IK) rows, polygon and margin are not computed here
+    (the caller keeps the given q and the plan's polygon).
+    Arguments as ``torques``.
+    """
+    n = q.shape[0]
+    out = np.empty((n, sp.ROW))
+    w = np.zeros(sp.SCRATCH)  # rows write_rows reads but no pass fills (IK) stay 0
+    for start in range(0, n, B):
+        m = min(B, n - start)
+        _load(q, qd, qdd, side, sole, share, start, m, w)
+        _pass(chain, gravity, m, w)
+        sp.write_rows(chain[3], gravity, m, w, out, np.arange(start, start + m))
+    return out
 
 
 def plan_inputs(plan) -> tuple:

@@ -1,7 +1,8 @@
 """Drivers of the compiled sample pipeline: a plan's series, a GA population's scores.
 
 ``series`` fills one row per sample (``sample.ROW`` floats) for each individual of
-a population (``prange``): the plan's time series. ``scores`` reduces the same
+a population (one thread): the plan's time series. ``scores`` (``prange``, one thread
+per individual) reduces the same
 rows per individual to the GA's numbers - joint work Σ∫|τθ̇|dt [J] (trapezoid over
 the samples), minimum ZMP margin [m] and the worst joint-limit excursion [rad] -
 and refines the margin between samples: at every interior local minimum of the
@@ -38,6 +39,7 @@ import numpy as np
 from numba import njit, prange
 
 from slopewalk.planner.joints import JOINT_KINDS
+from slopewalk.planner.kernel import cache
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel import tables as tb
 from slopewalk.planner.kinematics import gravity_in_slope
@@ -69,21 +71,23 @@ def _footprints(landing, x, hip_width):
     return y
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def series(
     pf, pi, landing, geometry, dh_a, d5, mass, com, inertia, gravity, X, inputs, index, count,
     size, double, n,
 ):  # fmt: skip
     """Rows of every sample for every individual, shape (P, n, ROW).
 
-    The samples are the blocks of a ``tables.Blocks`` of n samples. The work is split
-    into (individual, run of blocks) tasks, so one long plan uses every thread too.
+    The samples are the blocks of a ``tables.Blocks`` of n samples, in (individual, run
+    of blocks) tasks. One thread: a plan is a few ms, and ``parallel=True`` cost ~6 s
+    of compiling (the parfor lowering) in every trial's first command; a sweep's
+    workers fill the cores with trials anyway.
     """
     P, nb = X.shape[0], count.size
     out = np.empty((P, n, sm.ROW))
     parts = max(1, min(nb * sm.BLOCK // SERIES_BLOCK, 64 // P))
     per = -(-nb // parts)
-    for task in prange(P * parts):
+    for task in range(P * parts):
         p, part = task // parts, task % parts
         w = sm.scratch()
         x = X[p]
@@ -357,8 +361,11 @@ class KernelWalk:
         ``tables.GaitTable.individuals`` reads it.
         """
         X = self.gait.individuals(X)
+        cache.first_use("plan")
         with _LAUNCH:
-            return series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
+            out = series(*self._args(slope), X, *_fields(self.grid_blocks), self.grid[1].size)
+        cache.compiled("plan")
+        return out
 
     def scores(
         self, slope: float, X, *, samples: str = "limit", refine: bool = True, counts=False,
@@ -382,11 +389,13 @@ class KernelWalk:
         pieces, times = self.limit if samples == "limit" else self.grid
         blocks = self.limit_blocks if samples == "limit" else self.grid_blocks
         bounds = self.limits if limits is None else np.asarray(limits, dtype=float)
+        cache.first_use("scores")
         with _LAUNCH:
             out = scores(
                 *self._args(slope), bounds, X, pieces, times, *_fields(blocks), refine,
                 float(loaded),
             )  # fmt: skip
+        cache.compiled("scores")
         head = out[:4] if counts else out[:3]
         return (*head, *out[4:]) if contact else head
 

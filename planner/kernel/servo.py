@@ -236,15 +236,27 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
 def fixed_point(chain, gravity, q, qd, qdd, side, sole, share, rate_terms, kp, tol, most):
     """``compliance.compliant_walk``'s iteration: δ = −(τ(q + δ) + rate terms) / kp.
 
-    Returns δ [rad] (n, 8), the iterations made and the last largest change [rad].
+    Returns δ [rad] (n, 8), the iterations made and the last largest change [rad] (NaN
+    once any change is, as numpy's max). Written in loops: numba's array expressions
+    cost ~3 s of compiling here.
     """
-    delta = np.zeros_like(q)
+    n, dof = q.shape
+    delta, moved = np.zeros((n, dof)), np.empty((n, dof))
     change, iterations = np.inf, 0
     while iterations < most and not change < tol:
-        tau = dy.torques(chain, gravity, q + delta, qd, qdd, side, sole, share)
-        new = -(tau + rate_terms) / kp
-        change = np.abs(new - delta).max() if new.size else 0.0
-        delta, iterations = new, iterations + 1
+        for k in range(n):
+            for i in range(dof):
+                moved[k, i] = q[k, i] + delta[k, i]
+        tau = dy.torques(chain, gravity, moved, qd, qdd, side, sole, share)
+        change = 0.0
+        for k in range(n):
+            for i in range(dof):
+                new = -(tau[k, i] + rate_terms[k, i]) / kp
+                step = abs(new - delta[k, i])
+                if change == change and not step <= change:
+                    change = step  # NaN stays NaN
+                delta[k, i] = new
+        iterations += 1
         if not np.isfinite(change):
             break
     return delta, iterations, change

@@ -47,6 +47,38 @@ def test_compiled_torques_are_the_numpy_torques_at_sampled_states(plan, inputs, 
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
 
 
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), size=st.floats(0.01, 0.3))
+def test_compiled_plan_of_is_the_numpy_plan_of_at_sampled_states(plan, seed, size):
+    """The walk at other joint motion (``_Dynamics.plan_of``): torques, ZMP (the kernel's
+    as the wrench's CoP, numpy's link by link, eq. (4)), CoM, swing sole, forces, margin.
+    The ZMP, its margin and the friction ratio divide by F_z, which a random state takes
+    near 0 (a ZMP km away): their rounding is relative, held to 1e-9 of the value."""
+    rng = np.random.default_rng(seed)
+    shape = plan.q.shape
+    q = plan.q + size * rng.standard_normal(shape)
+    qd = plan.qd + 10 * size * rng.standard_normal(shape)
+    qdd = plan.qdd + 100 * size * rng.standard_normal(shape)
+    dyn = _Dynamics(plan)
+    got, want = dyn.plan_of(q, qd, qdd, compiled=True), dyn.plan_of(q, qd, qdd)
+    force = np.abs(want.ground_force).max()
+    for name, atol in [
+        ("tau", 1e-9 * np.abs(want.tau).max()),
+        ("zmp", 1e-9),  # [m]
+        ("zmp_lipm", 1e-9),
+        ("com", 1e-12),
+        ("com_acc", 1e-9 * np.abs(want.com_acc).max()),
+        ("swing_sole", 1e-12),
+        ("margin", 1e-9),
+        ("ground_force", 1e-9 * force),
+        ("stance_force", 1e-9 * force),
+        ("swing_force", 1e-9 * force),
+        ("friction_ratio", 1e-9),
+    ]:
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-9, atol=atol)
+    assert np.array_equal(got.q, q) and np.array_equal(got.polygon, plan.polygon)
+
+
 def test_compiled_linearisation_is_the_numpy_one(plan):
     tau, mass, stiff, vel, jac = servo_loop._linearised_compiled(plan)
     want = servo_loop.linearised(plan) + (servo_loop.support_jacobian(plan),)

@@ -75,6 +75,23 @@ def test_edge_inertia_is_the_same_from_any_point_of_the_line(spec):
     np.testing.assert_allclose(there, here, rtol=1e-9)
 
 
+@pytest.mark.parametrize("axis", [ROLL, PITCH])
+def test_line_inertia_is_edge_inertia_about_the_same_line(spec, axis):
+    """``LinkMoments`` (frames once per plan, d² = across² + height²) against the general
+    ``edge_inertia`` (frames per call, d² = |r|² − (r·ê)²) about the support's lines of a
+    walk up 10° in both stances and double support: the same sum in another order."""
+    plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
+    rows = np.arange(plan.t.size)
+    assert plan.double_support.any() and set(plan.stance) == {0, 1}
+    for position in support_lines(plan, axis):
+        point = np.zeros((rows.size, 2))
+        point[:, axis] = position
+        direction = np.zeros((rows.size, 2))
+        direction[:, 1 - axis] = 1.0
+        want = edge_inertia(plan, rows, point, direction)
+        np.testing.assert_allclose(line_inertia(plan, axis, position), want, rtol=1e-12)
+
+
 def test_a_walk_inside_its_polygon_does_not_turn(spec):
     plan = plan_walk(spec, GaitParams.nominal(spec, 2.0, steps=1))
     assert plan.margin.min() > 0

@@ -32,10 +32,13 @@ from slopewalk.bench.experiments.envelope.cell import (
     run_cell_search,
 )
 from slopewalk.bench.experiments.envelope.config import EnvelopeConfig
+from slopewalk.bench.experiments.sweep.run import WORKER_START_S
 from slopewalk.bench.tables.envelope import envelope_format, is_failure
 
 RECORDINGS_DIR = "recordings"
-CELL_S = 2.5  # [s] per cell and worker, the first estimate (GA 2 x 3000 evaluations + 4 trials)
+CELL_S = 1.3  # [s] per cell and worker, the first estimate: run_cell's CPU time, 8 cells of
+# the default grid from 0.3 to 2 s and -30 to 35 deg (GA 2 x 3000 evaluations ~0.6 s, its trials
+# 0.3-2 s), load ~5 on the 2-core machine; was 2.5 before the predictors were compiled
 CONVERGENCE_SHARE = 0.10
 CONVERGENCE_FACTOR = 4
 
@@ -177,14 +180,26 @@ def run_envelope(
     )
 
 
+def first_estimate_s(cells: int, workers: int, cell_s: float = CELL_S, *, compile_s=None):
+    """The time [s] ``cells`` cells take on ``workers`` workers: ``cell_s`` each (the GA
+    and the cell's trials, analytic work included), the workers' start and, where the
+    kernel's code is not cached, its compiling (``compile_s``; None: as
+    ``planner/kernel/cache.py`` says for the GA's and a trial's entries)."""
+    if compile_s is None:
+        from slopewalk.planner.kernel import cache
+
+        compile_s = cache.cold_seconds("scores", "plan", "predictors")
+    return cells * cell_s / max(workers, 1) + WORKER_START_S + compile_s
+
+
 def _intro(name, total, done, workers, executor, cell_s) -> str:
     left = total - done
     where = f" on {workers} workers" if executor is None else ""
     per = workers if executor is None else 1
     return (
         f"{name}: {total} cells, {done} already done, {left} to run{where}: about "
-        f"{duration(left * cell_s / per)} at {cell_s:g} s per cell and worker (refined as "
-        "cells finish)"
+        f"{duration(first_estimate_s(left, per, cell_s))} at {cell_s:g} s per cell and "
+        "worker (refined as cells finish)"
     )
 
 

@@ -59,7 +59,33 @@ TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
 RECORDINGS_DIR = "recordings"
 SORT_LIMIT = 10_000  # sweeps up to this size run longest trial first; larger ones in file order
-SIM_RATE = 35_000.0  # [sim steps/s] per worker, the first estimate (2-core x86 machine, 1 ms steps)
+# The first estimate of a sweep's time (``first_estimate_s``), from run_trial's CPU time on
+# the 2-core machine (trials of 0.3-3 s step time, flat and 10 deg, warm cache, load ~5):
+ROLLOUT_RATE = 60_000.0  # [sim steps/s] per worker: the trial's mujoco.rollout alone
+ANALYTIC_S_PER_STEP = 20e-6  # [s] per sim step: the rest of a trial - the plan, the
+# predictors (servo loop, compliance, tipping), decoding and comparison - all of which
+# scale with the walk's samples (1 ms, as the sim's steps): 37 us a step in all
+WORKER_START_S = 2.5  # [s] a worker's imports and cached-kernel loading
+
+
+def step_seconds() -> float:
+    """A worker's time per simulated step of a trial [s]: the rollout and the analytic work."""
+    return 1.0 / ROLLOUT_RATE + ANALYTIC_S_PER_STEP
+
+
+def first_estimate_s(steps: float, workers: int, *, compile_s: float | None = None) -> float:
+    """The time [s] ``steps`` simulated steps of trials take on ``workers`` workers.
+
+    Each step costs ``step_seconds`` (the rollout and the plan's and predictors' work per
+    sample); the workers start once (``WORKER_START_S``) and, where the kernel's code is
+    not cached, compile it first (``compile_s``; None: as ``planner/kernel/cache.py``
+    says for a trial's entries).
+    """
+    if compile_s is None:
+        from slopewalk.planner.kernel import cache
+
+        compile_s = cache.cold_seconds("plan", "predictors")
+    return steps * step_seconds() / max(workers, 1) + WORKER_START_S + compile_s
 
 
 def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
@@ -209,14 +235,17 @@ def run_sweep(
 
     def intro(done: int, workers: int) -> str:
         steps_left[0] = config.trials.simulated_steps() * (total - done) / max(total, 1)
+        rate = 1.0 / step_seconds()
         if executor is None:
             where = f" on {workers} workers"
-            estimate = f"about {duration(steps_left[0] / (SIM_RATE * workers))}"
+            estimate = f"about {duration(first_estimate_s(steps_left[0], workers))}"
         else:
-            where, estimate = "", f"about {duration(steps_left[0] / SIM_RATE)} of worker time"
+            where = ""
+            estimate = f"about {duration(first_estimate_s(steps_left[0], 1))} of worker time"
         return (
             f"sweep: {total} trials, {done} already done, {total - done} to run{where}: "
-            f"{estimate} at {SIM_RATE:.0f} sim steps/s per worker (refined as trials finish)"
+            f"{estimate} at {rate:.0f} sim steps/s per worker, the analytic work included "
+            "(refined as trials finish)"
         )
 
     def after_row(row: dict, left_trials: int) -> str:

@@ -1,0 +1,178 @@
+"""Where the compiled kernel is cached, each module under its own key, and the cold start's line.
+
+numba keys a cached function by its own source file only, not by the files of the
+functions it calls: a changed ``sample.py`` would meet a cached ``run.py`` compiled
+against the old one. So each kernel module's key (``module_key``) is a hash of its
+file and of the kernel files it imports, transitively (``dependencies``, read from
+its ``from slopewalk.planner.kernel import …`` lines): an edit recompiles the modules
+that see it and no other (``servo.py``: the servo loop alone, ~7 s, not the whole
+kernel's ~30). ``KernelLocator`` is numba's locator for ``NUMBA_CACHE_DIR`` with that
+key as the source stamp, put first in numba's list of locators (``install``); numba
+drops a module's cached functions when the stamp it stored differs.
+
+``Entry`` names what one kind of command compiles (``ENTRIES``: a plan, a GA's scores,
+a trial's predictors); numba compiles a function at its first call, so a command
+compiles only the entries it calls. The drivers call ``first_use`` before an entry's
+call, which prints one line to stderr when its code is not cached
+(``slopewalk: compiling the kernel (once, about N s)``, N the sum of the compile
+times, measured on the 2-core machine (docs/benchmark.md), of the cold entries the
+command expects, ``expect``), and ``compiled`` after it. The mark is a
+file in the cache folder named by the entry's modules' keys, so an edit or an
+emptied cache makes the line come back.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import sys
+import time
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from numba.core import caching, config
+
+from slopewalk.planner.kernel.location import default_dir
+
+KERNEL = Path(__file__).parent
+_IMPORT = re.compile(r"^from slopewalk\.planner\.kernel import (\w+)", re.MULTILINE)
+
+
+@cache
+def dependencies(module: str) -> frozenset[str]:
+    """The kernel modules ``module`` (a file stem of planner/kernel) imports, transitively
+    (this module, which compiles nothing, left out)."""
+    text = (KERNEL / f"{module}.py").read_text()
+    found = {m for m in _IMPORT.findall(text) if m != "cache" and (KERNEL / f"{m}.py").exists()}
+    for name in tuple(found):
+        found |= dependencies(name)
+    return frozenset(found - {module})
+
+
+@cache
+def module_key(module: str) -> str:
+    """Hash of ``module``'s source and of its kernel dependencies' (module doc)."""
+    digest = hashlib.sha256()
+    for name in sorted(dependencies(module) | {module}):
+        digest.update(name.encode() + b"\0" + (KERNEL / f"{name}.py").read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _root() -> str:
+    """numba's cache folder: ``NUMBA_CACHE_DIR`` as numba read it, else ``default_dir``."""
+    return getattr(config, "CACHE_DIR", "") or str(default_dir())
+
+
+class KernelLocator(caching.UserProvidedCacheLocator):
+    """numba's ``NUMBA_CACHE_DIR`` locator for the kernel's files, stamped with ``module_key``."""
+
+    def __init__(self, py_func, py_file):
+        super().__init__(py_func, py_file)
+        self._cache_path = os.path.join(_root(), self.get_suitable_cache_subpath(py_file))
+
+    def get_source_stamp(self):
+        return module_key(Path(self._py_file).stem)
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if Path(py_file).resolve().parent != KERNEL.resolve():
+            return None
+        # numba's own check of the source file and the folder, without its parent's
+        # "only where NUMBA_CACHE_DIR is set" (``_root`` falls back to ours)
+        return super(caching.UserProvidedCacheLocator, cls).from_function(py_func, py_file)
+
+
+def install() -> None:
+    """Put ``KernelLocator`` first in numba's locators (before any kernel function is made)."""
+    old = "_CacheImpl"  # its name before numba 0.61
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, old)
+    classes = impl._locator_classes
+    if KernelLocator not in classes:
+        classes.insert(0, KernelLocator)
+
+
+@dataclass(frozen=True)
+class Entry:
+    """What one kind of command compiles: its modules and their compile time.
+
+    Attributes:
+        name: The entry point ("plan", "scores", "predictors").
+        modules: The kernel modules whose functions it compiles.
+        seconds: Cold compile time measured on the 2-core machine [s] (docs/benchmark.md).
+    """
+
+    name: str
+    modules: tuple[str, ...]
+    seconds: float
+
+    def mark(self) -> Path:
+        """The file that says this entry's functions are in the cache."""
+        keys = "-".join(module_key(m) for m in self.modules)
+        root = Path(_root())
+        return root / "compiled" / f"{self.name}-{hashlib.sha256(keys.encode()).hexdigest()[:16]}"
+
+
+# cold compile CPU s on the 2-core machine at load ~1.6 (docs/benchmark.md, compile_*_cpu_s:
+# a plan 21 s, a trial 43 s, its first calls' own work ~2 s each left out)
+ENTRIES = {
+    "plan": Entry("plan", ("run",), 20.0),  # a plan's series (run.series)
+    "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
+    "predictors": Entry("predictors", ("dynamics", "servo"), 21.0),  # a trial's servo loop
+}
+_WARM: set[str] = set()  # entries asked about in this process
+_DONE: set[str] = set()  # entries marked in this process
+_EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile (``expect``)
+NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
+
+
+def cold_seconds(*names: str) -> float:
+    """The compile time [s] of the entries of ``names`` whose code is not cached."""
+    return sum(ENTRIES[n].seconds for n in names if not ENTRIES[n].mark().exists())
+
+
+def expect(*names: str) -> None:
+    """The entries the running command compiles, for ``first_use``'s one line (the CLI)."""
+    _EXPECTED[0] = names
+
+
+def first_use(name: str) -> None:
+    """Before a call of entry ``name``: if its code is not cached, say so on stderr, once.
+
+    The line sums the cold entries the command expects (``expect``; else ``name``'s
+    alone). Once per cache and command: a notice file next to the mark stands for it,
+    so the workers of a sweep compiling at the same time print one line between them.
+    """
+    if name in _WARM:
+        return
+    _WARM.add(name)  # asked once per process; ``compiled`` marks it after the call
+    entry = ENTRIES[name]
+    if entry.mark().exists():
+        return
+    names = set(_EXPECTED[0]) | {name}
+    _WARM.update(names)  # the line covers the command's other entries
+    seconds = cold_seconds(*names)
+    notice = entry.mark().with_suffix(".notice")
+    try:
+        notice.parent.mkdir(parents=True, exist_ok=True)
+        if notice.exists() and time.time() - notice.stat().st_mtime < NOTICE_S:
+            return
+        notice.touch()
+    except OSError:
+        pass
+    print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
+    sys.stderr.flush()
+
+
+def compiled(name: str) -> None:
+    """After a call of entry ``name``: mark it warm (its code is in the cache now)."""
+    if name in _DONE:
+        return
+    _DONE.add(name)
+    mark = ENTRIES[name].mark()
+    try:
+        mark.parent.mkdir(parents=True, exist_ok=True)
+        mark.touch()
+    except OSError:
+        pass  # an unwritable cache: numba recompiles each time
