@@ -160,3 +160,16 @@ class ModelReference:
         wrench = np.linalg.solve(J[:, base_dofs].T, qfrc[base_dofs])
         tau = signs * (qfrc[hinge_dofs] - J[:, hinge_dofs].T @ wrench)
         return tau, R_S.T @ wrench[:3]
+
+
+def held_at_first_pose(scene, plan, *, actuators: str, steps: int):
+    """The scene's model and data after ``steps`` 1 ms steps from the plan's first pose,
+    each actuator commanded to hold it (``ModelScene.initial_state``/``controls``)."""
+    model = scene.build(plan, friction=1.0, actuators=actuators, timestep=1e-3)
+    data = mujoco.MjData(model)
+    state = scene.initial_state(model, plan)
+    mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    data.ctrl[:] = scene.controls(model, plan.q_left_right[0])[0]
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    return model, data

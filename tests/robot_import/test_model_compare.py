@@ -12,6 +12,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from model_reference import held_at_first_pose
 
 from slopewalk.bench.cli import main
 from slopewalk.bench.experiments.model_compare import (
@@ -37,13 +38,7 @@ def walker():
 
 def _held_give(scene, plan) -> float:
     """Largest held joint's distance to its map angle [rad] after 0.3 s at the first pose."""
-    model = scene.build(plan, friction=1.0, actuators="servo", timestep=1e-3)
-    data = mujoco.MjData(model)
-    state = scene.initial_state(model, plan)
-    mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    data.ctrl[:] = scene.controls(model, plan.q_left_right[0])[0]
-    for _ in range(300):
-        mujoco.mj_step(model, data)
+    model, data = held_at_first_pose(scene, plan, actuators="servo", steps=300)
     return max(
         abs(data.qpos[model.joint(name).qposadr[0]] - angle)
         for name, angle in scene.fit.held.items()

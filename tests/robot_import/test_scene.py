@@ -12,15 +12,12 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from model_reference import held_at_first_pose
 
-from slopewalk.bench.robot_import.fit import fit_model
-from slopewalk.bench.robot_import.mapfile import load_map
-from slopewalk.bench.robot_import.scene import ModelScene
-from slopewalk.bench.robot_import.write import imported_spec
+from slopewalk.bench.robot_import.scene import model_scene
 from slopewalk.bench.sim.playback import play
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.spec import spec_from_dict
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 # walker_motors.urdf has motors only: the scene adds servos from the map's [servo] table.
@@ -35,13 +32,10 @@ MODELS = {
 
 @pytest.mark.parametrize("name", sorted(MODELS))
 def test_first_pose_stands_on_the_plane_and_joints_track_the_plan(name):
-    path, map_path = MODELS[name]
-    robot_map = load_map(map_path)
-    fit = fit_model(path, robot_map)
-    spec = spec_from_dict(imported_spec(fit, robot_map)[0])
+    scene = model_scene(*MODELS[name])
+    spec, fit = scene.spec, scene.fit
     gait = replace(GaitParams.nominal(spec, 1.0, slope=np.deg2rad(5.0)), steps=1, tilt=0.0)
     plan = plan_walk(spec, gait)
-    scene = ModelScene(fit, spec)
     recording = play(plan, actuators="servo_ff", settle=0.3, hold=0.0, scene=scene)
     s, t = recording.sensors, recording.t
     weight = mujoco.mj_getTotalmass(fit.model) * 9.81
@@ -57,19 +51,10 @@ def test_first_pose_stands_on_the_plane_and_joints_track_the_plan(name):
 
 def test_the_floor_feedforward_knows_every_corner_of_a_two_box_sole():
     """``ModelScene.floor``'s sole corners are where MuJoCo puts the feet's contacts."""
-    path, map_path = MODELS["walker"]
-    robot_map = load_map(map_path)
-    fit = fit_model(path, robot_map)
-    spec = spec_from_dict(imported_spec(fit, robot_map)[0])
+    scene = model_scene(*MODELS["walker"])
+    spec, fit = scene.spec, scene.fit
     plan = plan_walk(spec, replace(GaitParams.nominal(spec, 1.0), steps=1))
-    scene = ModelScene(fit, spec)
-    model = scene.build(plan, friction=1.0, actuators="servo_ff", timestep=1e-3)
-    data = mujoco.MjData(model)
-    state = scene.initial_state(model, plan)
-    mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    data.ctrl[:] = scene.controls(model, plan.q_left_right[0])[0]
-    for _ in range(100):
-        mujoco.mj_step(model, data)
+    model, data = held_at_first_pose(scene, plan, actuators="servo_ff", steps=100)
     corners = np.array(scene.floor(model).corners)  # (2, 8, 2): two boxes of 4 corners
     assert corners.shape == (2, 8, 2)
     for foot, side in enumerate(("l", "r")):
