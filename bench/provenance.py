@@ -11,7 +11,7 @@ keyed by its path from the repository root:
   those carry ``last_changed_in``, the commit that last changed the file;
 - ``verified_with``: the versions of a later run that wrote the same bytes again;
 - ``code_sha256``: for the files of a step that names the source it depends on
-  (``regenerate.Step.code``), a digest of that source (``code_digest``) as it was when the
+  (``regenerate.Step.code``), a digest of that source (``digest.code_digest``) as it was when the
   file was last written or verified; tests/test_trials.py fails when the source now
   differs (the file may be stale: regenerate it).
 
@@ -22,12 +22,13 @@ byte changes nothing but ``verified_with``.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import subprocess
 import sys
 from importlib import metadata
 from pathlib import Path
+
+from slopewalk.bench.digest import sha256
 
 MANIFEST = Path("results") / "PROVENANCE.json"
 # The distributions whose versions can change a committed number: the physics, the
@@ -77,24 +78,6 @@ def last_commit(path: str | Path, root: str | Path = ".") -> str | None:
         return _git(Path(root), "log", "-1", "--format=%H", "--", str(path)) or None
     except (OSError, subprocess.CalledProcessError):
         return None
-
-
-def code_digest(patterns: tuple[str, ...], root: str | Path = ".") -> str:
-    """sha256 over the files matching ``patterns`` (globs from ``root``, ``**`` allowed),
-    sorted by path: each path and the sha256 of its bytes. Content only: no git needed,
-    and a rebase or a squash of the history that keeps the files keeps the digest."""
-    root = Path(root)
-    files = sorted({p for pattern in patterns for p in root.glob(pattern) if p.is_file()})
-    if not files:
-        raise ValueError(f"code_digest: no file matches {patterns}")
-    digest = hashlib.sha256()
-    for path in files:
-        digest.update(f"{path.relative_to(root).as_posix()}\0{sha256(path)}\n".encode())
-    return digest.hexdigest()
-
-
-def sha256(path: str | Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def load(root: str | Path = ".") -> dict[str, dict]:

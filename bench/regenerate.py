@@ -20,7 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from slopewalk.bench import provenance
+from slopewalk.bench import digest, provenance
 from slopewalk.planner.errors import SlopewalkError
 
 
@@ -35,7 +35,7 @@ class Step:
     ``stdout``: the output file its printed summary goes to (the trials' ``.txt``).
     ``manual``: a file written by hand from a command's output; listed, never run.
     ``code``: globs of the source its outputs depend on; its digest is recorded with them
-    (``provenance.code_digest``) and a test fails when that source changes.
+    (``digest.code_digest``) and a test fails when that source changes.
     """
 
     args: tuple[str, ...]
@@ -228,7 +228,7 @@ def run_step(step: Step, root: Path = Path(".")) -> list[str]:
             subprocess.run(argv, cwd=root, stdout=out, check=True)
     else:
         subprocess.run(argv, cwd=root, check=True)
-    code = provenance.code_digest(step.code, root) if step.code else None
+    code = digest.code_digest(step.code, root) if step.code else None
     return provenance.record(list(step.outputs), step.command, root, code=code)
 
 

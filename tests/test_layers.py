@@ -16,6 +16,7 @@ FOLDERS = {"slopewalk": ROOT / "slopewalk", "slopewalk.planner": ROOT / "planner
 LAYERS = (  # (module prefix, layer): the longest matching prefix decides
     ("slopewalk.planner", 0),
     ("slopewalk.bench.actuators", 1),
+    ("slopewalk.bench.digest", 1),
     ("slopewalk.bench.files", 1),
     ("slopewalk.bench.flags", 1),
     ("slopewalk.bench.controllers", 1),

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from slopewalk.bench import provenance, regenerate
+from slopewalk.bench import digest, provenance, regenerate
 
 ROOT = Path(__file__).resolve().parents[1]
 CHEAP = "results/trials/T2_slope0_mu1.0"
@@ -58,7 +58,7 @@ def test_every_committed_trial_was_written_by_the_source_there_now():
     manifest = provenance.load(ROOT)
     steps = _trial_steps()
     assert len(steps) == 7 and all(s.code == regenerate.TRIAL_CODE for s in steps)
-    now = provenance.code_digest(regenerate.TRIAL_CODE, ROOT)
+    now = digest.code_digest(regenerate.TRIAL_CODE, ROOT)
     for step in steps:
         for path in step.outputs:
             recorded = manifest[path].get("code_sha256")
@@ -76,16 +76,16 @@ def test_the_code_digest_sees_every_file_it_covers_and_only_those(tmp_path):
     (tmp_path / "planner" / "robots" / "r.toml").write_text("m = 1\n")
     (tmp_path / "bench" / "report" / "c.py").write_text("y = 1\n")
     patterns = ("planner/**/*.py", "planner/**/*.toml")
-    before = provenance.code_digest(patterns, tmp_path)
+    before = digest.code_digest(patterns, tmp_path)
     (tmp_path / "bench" / "report" / "c.py").write_text("y = 2\n")  # not a trial's source
-    assert provenance.code_digest(patterns, tmp_path) == before
+    assert digest.code_digest(patterns, tmp_path) == before
     (tmp_path / "planner" / "robots" / "r.toml").write_text("m = 2\n")  # the robot changed
-    changed = provenance.code_digest(patterns, tmp_path)
+    changed = digest.code_digest(patterns, tmp_path)
     assert changed != before
     (tmp_path / "planner" / "robots" / "r.toml").rename(tmp_path / "planner" / "r.toml")
-    assert provenance.code_digest(patterns, tmp_path) != changed  # a move is a change
+    assert digest.code_digest(patterns, tmp_path) != changed  # a move is a change
     with pytest.raises(ValueError, match="no file matches"):
-        provenance.code_digest(("nothing/*.py",), tmp_path)
+        digest.code_digest(("nothing/*.py",), tmp_path)
 
 
 def test_regenerating_records_the_digest_and_keeps_it_current(tmp_path):
@@ -96,10 +96,10 @@ def test_regenerating_records_the_digest_and_keeps_it_current(tmp_path):
                            code=("planner/*.py",))  # fmt: skip
     regenerate.run_step(step, tmp_path)
     entry = provenance.load(tmp_path)["results/scene.xml"]
-    assert entry["code_sha256"] == provenance.code_digest(("planner/*.py",), tmp_path)
+    assert entry["code_sha256"] == digest.code_digest(("planner/*.py",), tmp_path)
     (tmp_path / "planner" / "a.py").write_text("x = 2\n")  # same output, new source
     regenerate.run_step(step, tmp_path)
     again = provenance.load(tmp_path)["results/scene.xml"]
     assert again["sha256"] == entry["sha256"]
-    assert again["code_sha256"] == provenance.code_digest(("planner/*.py",), tmp_path)
+    assert again["code_sha256"] == digest.code_digest(("planner/*.py",), tmp_path)
     assert again["code_sha256"] != entry["code_sha256"]

@@ -36,32 +36,31 @@ from pathlib import Path
 
 import slopewalk.planner as planner_package
 from slopewalk.bench.batch.executor import ExecutorError, one_line
+from slopewalk.bench.digest import code_digest
 from slopewalk.bench.flags import JOIN_TIMEOUT_S
 
 PER_THREAD = 2  # jobs in flight per worker thread: one running, the next already there
 REFRESH_S = 2.0  # [s] how often the workers connected are asked for again
 CONNECT_TIMEOUT_S = 10.0  # [s] to reach the scheduler
-SOURCE_SUFFIXES = (".py", ".toml")
+SOURCE_PATTERNS = ("**/*.py", "**/*.toml")
 DOCS = "docs/cluster.md"
 
 
 @lru_cache(maxsize=1)
 def code_identity() -> str:
     """This process's slopewalk, e.g. "0.1.0 3f2a9c01be47": the installed version and the
-    first 12 hex digits of a sha256 over the source (``.py``, ``.toml``) of the planner
-    and the bench, path by path. Two processes that play a trial alike show the same."""
+    first 12 hex digits of a sha256 over the source digests (``digest.code_digest``,
+    ``.py`` and ``.toml``) of the planner and the bench. Two processes that play a trial
+    alike show the same."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
         installed = version("slopewalk")
     except PackageNotFoundError:
         installed = "unknown"
-    digest = hashlib.sha256()
-    for name, root in (("planner", Path(planner_package.__path__[0])), ("bench", _BENCH)):
-        for path in sorted(p for p in root.rglob("*") if p.suffix in SOURCE_SUFFIXES):
-            digest.update(f"{name}/{path.relative_to(root).as_posix()}\0".encode())
-            digest.update(hashlib.sha256(path.read_bytes()).digest())
-    return f"{installed} {digest.hexdigest()[:12]}"
+    roots = (Path(planner_package.__path__[0]), _BENCH)
+    digests = "".join(code_digest(SOURCE_PATTERNS, root) for root in roots)
+    return f"{installed} {hashlib.sha256(digests.encode()).hexdigest()[:12]}"
 
 
 _BENCH = Path(__file__).resolve().parents[1]
