@@ -102,19 +102,17 @@ def fidelity_report(
     return "\n".join(lines) + "\n"
 
 
-def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """The Wilson score interval of a share of ``k`` in ``n`` (95 % for the default z).
-
-    (p + z²/2n ± z sqrt(p(1−p)/n + z²/4n²)) / (1 + z²/n), p = k/n: it stays inside
-    [0, 1] and keeps its width at shares near 0 or 1, where the normal interval
-    collapses; (0, 1) for n = 0.
+def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """The Wilson score interval of a share of ``k`` in ``n`` (scipy's ``binomtest``):
+    it stays inside [0, 1] and keeps its width at shares near 0 or 1, where the normal
+    interval collapses; (0, 1) for n = 0.
     """
     if n == 0:
         return 0.0, 1.0
-    p = k / n
-    centre = p + z * z / (2 * n)
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return float((centre - half) / (1 + z * z / n)), float((centre + half) / (1 + z * z / n))
+    from scipy.stats import binomtest
+
+    ci = binomtest(k, n).proportion_ci(confidence, method="wilson")
+    return float(ci.low), float(ci.high)
 
 
 def agreement(rows: list[dict], verdict: str = "predicted") -> tuple[int, int]:
