@@ -95,3 +95,37 @@ def test_the_command_appends_the_envelope_section_and_names_itself(table, tmp_pa
     assert f"Regenerate with `{command}`" in text
     assert f"The gaits of `{table}` (1 cells of step time >= 0.75 s)" in text
     assert text.index("# Open loop vs closed-loop controllers") < text.index("## Stability")
+
+
+def test_an_extended_row_is_replayed_as_its_own_family(tmp_path):
+    """An extended-family row carries its pelvis offset, step length and sway share into the
+    replay: the replayed walk is the cell's own (``EnvelopeCell.gait``) to the table's digits,
+    and the report names the family (a row replayed as the paper's gait would not be)."""
+    config = envelope_from_dict(
+        {
+            "steps": 2,
+            "grid": {"step_time": [1.0], "slope": [0], "actuators": ["stiff"]},
+            "search": {"population": 10, "generations": 4, "family": ["extended"]},
+        },
+        base_dir=Path("."),
+    )
+    (cell,) = config.cells
+    row = run_cell(cell)
+    path = tmp_path / "envelope.csv"
+    path.write_bytes(ENVELOPE.header + ENVELOPE.format_row(row))
+    jobs = table_jobs(path)
+    assert jobs and all(j.family == "extended" and len(j.x) == 6 for j in jobs)
+    for job in jobs:
+        replayed, own = job.params(), cell.gait(job.x)
+        for name in ("pelvis_offset", "step_length", "lean_share", "hip_height", "tilt"):
+            assert getattr(replayed, name) == pytest.approx(getattr(own, name), abs=1e-6)
+        assert replayed.step_length == pytest.approx(row[f"{job.gait}_step_length_m"], abs=1e-6)
+        assert replayed.pelvis_offset == pytest.approx(
+            row[f"{job.gait}_pelvis_offset_m"], abs=1e-6
+        )
+    verdicts = compare_envelope(jobs, (), workers=1)
+    for job, v in zip(jobs, verdicts, strict=True):
+        assert v["stiff", None] == job.table_verdicts["stiff"]
+    text = envelope_report(jobs, verdicts, (), source="e.csv")
+    assert "| max-margin (extended) | stiff |" in text
+    assert "T=1 s slope=0 mu=1 extended" == jobs[0].label

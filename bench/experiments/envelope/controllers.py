@@ -21,6 +21,7 @@ and the report counts how often its verdict is the table's.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,8 +49,9 @@ class GaitJob:
     Attributes:
         cell_id: The cell's id. label: e.g. "T=1 s slope=15 mu=1".
         step_time: [s]. slope_deg: [deg]. friction: Coulomb μ. steps: Steps per walk.
-        gait: "maxmargin" or "minwork". x: (hip height [m], swing lift [m], tilt [rad]).
-        modes: Actuator modes it is walked in.
+        gait: "maxmargin" or "minwork". x: (hip height [m], swing lift [m], tilt [rad]),
+            then for the extended family (pelvis offset [m], step length [m], sway share).
+        modes: Actuator modes it is walked in. family: The gait family of the row.
         table_verdicts: The table's open-loop verdict per mode ({} from a GA run).
     """
 
@@ -60,15 +62,33 @@ class GaitJob:
     friction: float
     steps: int
     gait: str
-    x: tuple[float, float, float]
+    x: tuple[float, ...]
     modes: tuple[str, ...]
     spec: RobotSpec = field(repr=False)
     table_verdicts: dict = field(default_factory=dict)
+    family: str = "paper"
+
+    def params(self):
+        """The walk of this gait (``GaitParams``), as ``envelope.cell.EnvelopeCell.gait``
+        builds it from the GA's variables: (Hz, Szmax, tilt), then (δ, L, w) when extended."""
+        from slopewalk.planner.gait import GaitParams
+
+        hip, lift, tilt, *extended = self.x
+        extra = {}
+        if extended:
+            offset, length, sway = extended
+            extra = {"pelvis_offset": offset, "step_length": length, "sway_share": sway}
+        return GaitParams.nominal(
+            self.spec, self.step_time, slope=float(np.deg2rad(self.slope_deg)),
+            steps=self.steps, hip_height=hip, swing_lift=lift, tilt=tilt, **extra,
+        )  # fmt: skip
 
 
 def _label(row: dict) -> str:
     t, s, mu = (float(row[k]) for k in ("step_time", "slope_deg", "friction"))
     text = f"T={t:g} s slope={s:g} mu={mu:g}"
+    if row.get("family", "paper") != "paper":
+        text += f" {row['family']}"
     return text + (f" robot {row['robot']}" if row["robot"] != "default" else "")
 
 
@@ -88,11 +108,17 @@ def row_jobs(row: dict, spec: RobotSpec, modes: tuple[str, ...], *, verdicts: bo
             continue  # not plannable at 1 ms: not played
         if gait == "minwork" and str(row.get("minwork_found")) != "True":
             continue  # nothing of the required margin: not played
-        x = (
+        x: tuple[float, ...] = (
             _number(row[f"{gait}_hip_height_m"]),
             _number(row[f"{gait}_swing_lift_m"]),
             float(np.deg2rad(_number(row[f"{gait}_tilt_deg"]))),
         )
+        family = str(row.get("family", "paper"))
+        if family != "paper":  # the extended family's own pelvis offset, step length, sway
+            x += tuple(
+                _number(row[f"{gait}_{c}"])
+                for c in ("pelvis_offset_m", "step_length_m", "sway_share")
+            )
         table = {m: row.get(sim_columns(gait, m)[0], "") for m in modes} if verdicts else {}
         jobs.append(
             GaitJob(
@@ -107,6 +133,7 @@ def row_jobs(row: dict, spec: RobotSpec, modes: tuple[str, ...], *, verdicts: bo
                 modes,
                 spec,
                 table,
+                family,
             )  # fmt: skip
         )
     return jobs
@@ -183,16 +210,11 @@ def play_gait(job_and_controllers) -> dict:
     from slopewalk.bench.experiments.sweep.trials import TIMESTEP
     from slopewalk.bench.sim.trial import run_trial
     from slopewalk.bench.sim.trial_spec import TrialSpec
-    from slopewalk.planner.gait import GaitParams
     from slopewalk.planner.plan import plan_walk
 
     job, controllers = job_and_controllers
     numba.set_num_threads(1)  # one per worker process
-    hip, lift, tilt = job.x
-    params = GaitParams.nominal(
-        job.spec, job.step_time, slope=float(np.deg2rad(job.slope_deg)), steps=job.steps,
-        hip_height=hip, swing_lift=lift, tilt=tilt,
-    )  # fmt: skip
+    params = job.params()
     plan = plan_walk(job.spec, params)
     out = {}
     for mode in job.modes:
@@ -235,39 +257,36 @@ def envelope_report(
     changes = []
     tally = {tag: [0, 0, 0] for tag in tags}  # rows where it walks more, as many, fewer cells
     agree = compared = 0
-    for gait in GAITS:
-        for mode in ACTUATOR_MODES:
-            picked = [
-                (j, v) for j, v in zip(jobs, verdicts, strict=True)
-                if j.gait == gait and mode in j.modes
-            ]  # fmt: skip
-            if not picked:
-                continue
-            base = [v[mode, None] == "stable" for _, v in picked]
-            cells_text = []
-            for controller, tag in zip(controllers, tags, strict=True):
-                walks = [v[mode, controller] == "stable" for _, v in picked]
-                gained = [
-                    j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w > b
-                ]
-                lost = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w < b]
-                cells_text.append(f"{sum(walks)} (+{len(gained)} −{len(lost)})")
-                tally[tag][(sum(walks) <= sum(base)) + (sum(walks) < sum(base))] += 1
-                if gained or lost:
-                    changes.append(
-                        f"- {tag}, {GAIT_NAMES[gait]} gait, {mode}: "
-                        + (f"gains {'; '.join(gained)}" if gained else "gains none")
-                        + (f"; loses {'; '.join(lost)}" if lost else "")
-                    )
-            lines.append(
-                f"| {GAIT_NAMES[gait]} | {mode} | {len(picked)} | {sum(base)} | "
-                + " | ".join(cells_text)
-                + " |"
-            )
-            for j, v in picked:
-                if j.table_verdicts.get(mode):
-                    compared += 1
-                    agree += j.table_verdicts[mode] == v[mode, None]
+    families = sorted({j.family for j in jobs}, key=lambda f: (f != "paper", f))
+    for family, gait, mode in itertools.product(families, GAITS, ACTUATOR_MODES):
+        name = GAIT_NAMES[gait] + (f" ({family})" if family != "paper" else "")
+        picked = [
+            (j, v) for j, v in zip(jobs, verdicts, strict=True)
+            if j.family == family and j.gait == gait and mode in j.modes
+        ]  # fmt: skip
+        if not picked:
+            continue
+        base = [v[mode, None] == "stable" for _, v in picked]
+        cells_text = []
+        for controller, tag in zip(controllers, tags, strict=True):
+            walks = [v[mode, controller] == "stable" for _, v in picked]
+            gained = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w > b]
+            lost = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w < b]
+            cells_text.append(f"{sum(walks)} (+{len(gained)} −{len(lost)})")
+            tally[tag][(sum(walks) <= sum(base)) + (sum(walks) < sum(base))] += 1
+            if gained or lost:
+                changes.append(
+                    f"- {tag}, {name} gait, {mode}: "
+                    + (f"gains {'; '.join(gained)}" if gained else "gains none")
+                    + (f"; loses {'; '.join(lost)}" if lost else "")
+                )
+        lines.append(
+            f"| {name} | {mode} | {len(picked)} | {sum(base)} | " + " | ".join(cells_text) + " |"
+        )
+        for j, v in picked:
+            if j.table_verdicts.get(mode):
+                compared += 1
+                agree += j.table_verdicts[mode] == v[mode, None]
     lines.append("")
     for tag, (more, same, fewer) in tally.items():
         lines.append(
