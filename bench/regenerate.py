@@ -137,7 +137,7 @@ STEPS: tuple[Step, ...] = (
     *_optimize_steps(),
     # the default envelope also rewrites the claims table from the old sweep.csv: the
     # sweep below writes it again, with this envelope
-    _step("slopewalk envelope --convergence", (f"results/envelope/{n}" for n in _ENVELOPE), 4),
+    _step("slopewalk envelope --convergence", (f"results/envelope/{n}" for n in _ENVELOPE), 7),
     _step(
         "slopewalk envelope bench/experiments/envelopes/extended-small.toml "
         "--out results/envelope/extended-small --workers 2 --convergence",
@@ -149,7 +149,7 @@ STEPS: tuple[Step, ...] = (
         "slopewalk controllers --workers 2 --envelope results/envelope/envelope.csv "
         "--out results/controllers.md",
         ("results/controllers.md",),
-        11,
+        20,  # both families of the default envelope
     ),  # fmt: skip
     *(
         _step(

@@ -169,7 +169,7 @@ def test_the_default_envelope_covers_the_papers_plane():
     )
     assert {15, 18, 22.5, 30} <= set(config.slopes_deg)
     assert {c.friction for c in config.cells} == {1.0}
-    assert {c.family for c in config.cells} == {"paper"}
+    assert {c.family for c in config.cells} == {"paper", "extended"}  # issue 24: both
 
 
 @pytest.mark.parametrize(
