@@ -48,7 +48,10 @@ OFFSETS = {
     "ankle": (0.001, 0.002, -0.001),
     "foot": (0.004, 0.005, -0.015),
 }
-SPECS = ("bioloid", "offset_coms")
+# knee_offset: those CoMs on legs whose knees sit 30 mm behind the hip–ankle line (a real
+# humanoid's, geometry.knee_offset), so the DH rows' b and the IK's effective links count
+KNEE_OFFSET = -0.030  # [m]
+SPECS = ("bioloid", "offset_coms", "knee_offset")
 # The nominal gait, and one of the extended family: the pelvis 12 mm ahead (leaning into
 # the slope), a 0.7-thigh step and a lean 40 % of the way from hold to sway.
 GAITS = {
@@ -67,8 +70,9 @@ def robots(spec) -> dict:
             for name, link in spec.links.items()
         },
     )
+    knee = replace(offset, knee_offset=KNEE_OFFSET)
     out = {}
-    for name, robot in zip(SPECS, (spec, offset), strict=True):
+    for name, robot in zip(SPECS, (spec, offset, knee), strict=True):
         walks = {
             (gait, s): plan_walk(
                 robot,
@@ -283,9 +287,12 @@ def test_bad_stance_is_refused(spec):
         stance_rooted_xml(spec, 2)
 
 
+@pytest.mark.parametrize("knee_offset", [0.0, KNEE_OFFSET])
 @pytest.mark.parametrize("actuators", ["stiff", "servo"])
-def test_home_pose_stands_still(spec, actuators):
-    """Flat feet, no chatter: after 1 s at the home key the soles have not crept."""
+def test_home_pose_stands_still(spec, actuators, knee_offset):
+    """Flat feet, no chatter: after 1 s at the home key the soles have not crept (a knee
+    offset too: the home key's angles are those of the effective links, turned back)."""
+    spec = replace(spec, knee_offset=knee_offset)
     model = mujoco.MjModel.from_xml_string(scene_xml(spec, actuators=actuators))
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
