@@ -148,6 +148,12 @@ def _geometry_notes(fit: Fit) -> list[str]:
         f"sole: the rectangle {(x1 - x0) * 1e3:.1f} x {(y1 - y0) * 1e3:.1f} mm around the sole "
         f"geoms, centred {(y0 + y1) / 2 * 1e3:+.1f} mm outward of the ankle (geometry.sole_offset)"
     )
+    knee = fit.geometry["knee_offset"]
+    notes.append(
+        f"knee: the axis {abs(knee) * 1e3:.1f} mm {'ahead of' if knee >= 0 else 'behind'} the "
+        "hip-ankle line at the zero pose (geometry.knee_offset; thigh and shank measured along "
+        "the line)"
+    )
     kinds = {int(fit.model.geom_type[g]) for side in SIDES for g in fit.soles[side]}
     if kinds != {int(mujoco.mjtGeom.mjGEOM_BOX)}:
         notes.append(

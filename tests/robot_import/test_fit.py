@@ -31,7 +31,7 @@ def test_detection_finds_the_legs_their_signs_and_the_geometry():
     g = fit.geometry  # the file's numbers: hips 0.12 apart, thigh 0.2, shank 0.19, ...
     expected = {"thigh": 0.2, "shank": 0.19, "hip_width": 0.12, "ankle_height": 0.04,
                 "ankle_to_toe": 0.08, "foot_length": 0.14, "foot_width": 0.07,
-                "sole_offset": 0.012}  # fmt: skip
+                "sole_offset": 0.012, "knee_offset": 0.0}  # fmt: skip
     assert g == pytest.approx(expected, abs=1e-12)
 
 
@@ -70,10 +70,42 @@ def test_refuses_a_tilted_hip_pitch_axis(tmp_path):
     assert message.startswith("left hip pitch 'l_leg_pitch' axis angle off the y axis: 20 deg")
 
 
-def test_refuses_a_knee_behind_the_hip_axis(tmp_path):
+# walker.xml with both knees 14 mm behind the hip–ankle line, the ankles kept under the hips
+KNEES_BEHIND = (
+    [f'<body name="{s}_shin" pos="0 0 -0.2">' for s in "lr"]
+    + [f'<body name="{s}_ankle_link" pos="0 0 -0.19">' for s in "lr"],
+    [f'<body name="{s}_shin" pos="-0.014 0 -0.2">' for s in "lr"]
+    + [f'<body name="{s}_ankle_link" pos="0.014 0 -0.19">' for s in "lr"],
+)
+
+
+def test_measures_knees_behind_the_hip_axis(tmp_path):
+    """Both knees 14 mm behind the hip–ankle line: carried as geometry.knee_offset, the thigh
+    and shank along the line, and the report says so."""
+    text = WALKER
+    for a, b in zip(*KNEES_BEHIND, strict=True):
+        text = text.replace(a, b)
+    path = tmp_path / "knees.xml"
+    path.write_text(text)
+    fit = fit_model(path)
+    assert fit.geometry["knee_offset"] == pytest.approx(-0.014, abs=1e-12)
+    assert (fit.geometry["thigh"], fit.geometry["shank"]) == pytest.approx((0.2, 0.19), abs=1e-12)
+    out = tmp_path / "knees.toml"
+    assert main(["robot", "import", str(path), "--out", str(out)]) == 0
+    assert load_spec(out).knee_offset == pytest.approx(-0.014, abs=1e-12)
+    assert "knee: the axis 14.0 mm behind the hip-ankle line" in out.read_text()
+
+
+def test_refuses_one_knee_behind_the_hip_axis(tmp_path):
+    """One knee off the line, the other on it: legs that are not mirror images."""
+    message = _refused(tmp_path, KNEES_BEHIND[0][1::2], KNEES_BEHIND[1][1::2])  # the right
+    assert message.startswith("knee_offset left vs right: 14 mm (tolerance 0.001 mm)")
+
+
+def test_refuses_an_ankle_ahead_of_the_hip_axis(tmp_path):
     message = _refused(tmp_path, '<body name="r_shin" pos="0 0 -0.2">',
                        '<body name="r_shin" pos="-0.014 0 -0.2">')  # fmt: skip
-    assert message.startswith("right knee 'r_knee_joint' axis ahead of the hip pitch axis")
+    assert message.startswith("right ankle pitch 'r_ank_p' axis ahead of the hip pitch axis")
     assert ": 14 mm (tolerance 0.001 mm)" in message
 
 
