@@ -29,6 +29,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from slopewalk.bench.robot_import.footprint import Footprint, sole_footprint
 from slopewalk.bench.robot_import.mapfile import SIDES, RobotImportError, RobotMap
 from slopewalk.planner.spec import JOINT_LIMIT_KEYS
 
@@ -70,6 +71,7 @@ class Fit:
         geometry: The spec's [geometry] values.
         sole: Per side the sole's extent (x min, x max, y min, y max) from the ankle centre.
         misfits: (what, measured size, unit) of every difference below its tolerance.
+        footprints: Per side the sole's contact footprint (``footprint``), from the ankle.
     """
 
     model: mujoco.MjModel
@@ -85,6 +87,7 @@ class Fit:
     geometry: dict[str, float]
     sole: dict[str, tuple[float, float, float, float]]
     misfits: list[tuple[str, float, str]] = field(default_factory=list)
+    footprints: dict[str, Footprint] = field(default_factory=dict)
 
     def ankle_centre(self, side: str) -> np.ndarray:
         """The ankle centre in the base frame [m]: on the ankle pitch axis, at the roll axis's y."""
@@ -439,8 +442,9 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
         lengths[side] = (leg["hip_pitch"].anchor[2] - leg["knee"].anchor[2],
                          leg["knee"].anchor[2] - leg["ankle_pitch"].anchor[2],
                          leg["knee"].anchor[0] - leg["hip_pitch"].anchor[0])  # fmt: skip
-    sole = {}
+    sole, footprints = {}, {}
     for side in SIDES:
+        footprints[side] = sole_footprint(model, data, frame, fit.soles[side], ankles[side])
         bottom = min(geom_corners(model, data, frame, g)[:, 2].min() for g in fit.soles[side])
         sole[side] = sole_extent(model, data, frame, fit.soles[side], ankles[side])
         lengths[side] += (ankles[side][2] - bottom,)
@@ -464,4 +468,5 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
         "ankle_height": ankle_height, "ankle_to_toe": x1, "foot_length": x1 - x0,
         "foot_width": y1 - y0, "sole_offset": (y0 + y1) / 2, "knee_offset": knee_offset,
     }  # fmt: skip
-    return replace(fit, pelvis_origin=origin, geometry=geometry, sole=sole, misfits=misfits)
+    return replace(fit, pelvis_origin=origin, geometry=geometry, sole=sole, misfits=misfits,
+                   footprints=footprints)  # fmt: skip
