@@ -13,6 +13,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from slopewalk.bench.sim.model import (
     SceneError,
@@ -23,7 +26,12 @@ from slopewalk.bench.sim.model import (
     write_default_mjcf,
 )
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
+from slopewalk.planner.joints import (
+    JOINT_NAMES,
+    MJCF_JOINTS,
+    SIDE_PREFIX,
+    stance_swing_to_left_right,
+)
 from slopewalk.planner.kinematics import (
     CHAIN_LINKS,
     Chain,
@@ -252,6 +260,33 @@ def test_inverse_dynamics_match_mj_inverse(robots, name, slope, gait):
     np.testing.assert_allclose(dyn.tau, tau, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(dyn.stance_force, force, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(dyn.stance_moment, moment, rtol=1e-6, atol=1e-9)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    knee=st.floats(-0.05, 0.05),
+    stance=st.integers(0, 1),
+    q=hnp.arrays(np.float64, 8, elements=st.floats(-1.2, 1.2)),
+)
+def test_random_poses_with_a_knee_offset_match_mj_kinematics(spec, knee, stance, q):
+    """Random joint angles (not a walk's), either stance leg, knees up to 50 mm off the
+    hip–ankle line: the twin's knee, ankle, hip, sole, toe and heel sites under
+    ``mj_kinematics`` are the DH frames' points, to 1e-12 m."""
+    spec = replace(spec, knee_offset=knee)
+    chain = Chain.from_spec(spec)
+    stance_arr, sole = np.array([stance]), np.zeros((1, 3))
+    frames = chain.frames(q[None], sole, stance_arr)
+    points = _planner_points(spec, frames, stance_arr, sole)
+    origin, rotation = chain.pelvis_pose(frames, stance_arr)
+    model = build_robot(spec).compile()  # full precision (the XML text keeps 6 digits)
+    data = mujoco.MjData(model)
+    data.qpos[:3] = origin[0]
+    mujoco.mju_mat2Quat(data.qpos[3:7], rotation[0].reshape(-1))
+    q_lr = stance_swing_to_left_right(q[None], stance_arr)[0]
+    data.qpos[[model.joint(name).qposadr[0] for name in MJCF_JOINTS]] = q_lr
+    mujoco.mj_kinematics(model, data)
+    worst = max(np.abs(data.site(site).xpos - p[0]).max() for site, p in points.items())
+    assert worst < 1e-12, worst
 
 
 @pytest.mark.parametrize(
