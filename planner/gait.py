@@ -150,13 +150,14 @@ class GaitParams:
         _check(
             self.hip_height <= top,
             f"hip height {self.hip_height:g} m: must lie in (0, {top:.4g}] m for "
-            f"{spec.name} (ankle height + thigh + shank)",
+            f"{spec.name} (ankle height + {_reach_words(spec)})",
         )
         lift = self.hip_height - spec.ankle_height + reach
         _check(
             self.swing_lift < lift,
             f"swing lift {self.swing_lift:g} m: must lie in [0, {lift:.4g}) m for {spec.name} "
-            f"at hip height {self.hip_height:g} m (hip height - ankle height + thigh + shank)",
+            f"at hip height {self.hip_height:g} m (hip height - ankle height + "
+            f"{_reach_words(spec)})",
         )
         _check(
             self.step_length <= 2 * reach,
@@ -166,7 +167,7 @@ class GaitParams:
         _check(
             abs(self.pelvis_offset) < reach,
             f"pelvis offset {self.pelvis_offset:g} m: must lie in ({-reach:.4g}, {reach:.4g}) m "
-            f"for {spec.name} (thigh + shank)",
+            f"for {spec.name} ({_reach_words(spec)})",
         )
 
     @classmethod
@@ -233,3 +234,10 @@ def _positive_length(name: str, value) -> None:
         _finite(value) and value > 0,
         f"{name} {ranges.show(value)} m: must be a finite length > 0 m",
     )
+
+
+def _reach_words(spec) -> str:
+    """How the error lines name ``spec.leg_reach``: the two links in line."""
+    if spec.knee_offset:
+        return "the legs' reach, √(thigh² + k²) + √(shank² + k²) with the knee offset k"
+    return "thigh + shank"

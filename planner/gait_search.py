@@ -69,7 +69,7 @@ import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.ik import tilted_plane_height, two_link_ik
+from slopewalk.planner.ik import leg_ik, tilted_plane_height
 from slopewalk.planner.joints import JOINT_KINDS, RIGHT, principal_angle
 from slopewalk.planner.kinematics import GRAVITY
 from slopewalk.planner.plan import score
@@ -189,18 +189,20 @@ def knee_distance_range(spec: RobotSpec) -> tuple[float, float]:
     """Hip-to-ankle distances [m] the search's knee limits allow.
 
     With knee flexion κ (0 = straight) the law of cosines gives
-    d² = L1² + L2² + 2 L1 L2 cos κ; the upper knee limit sets the shortest d, the
-    search's lower one (``search_limits``: at least ``min_knee_flexion`` bent) the
-    longest.
+    d² = L1² + L2² + 2 L1 L2 cos(κ + γ) over the effective links L1, L2 and the angle
+    γ = γ_s + γ_t a knee offset puts between them at κ = 0 (``ik.leg_ik``; 0 without
+    one); the upper knee limit sets the shortest d, the search's lower one
+    (``search_limits``: at least ``min_knee_flexion`` bent) the longest.
     """
     lo = max(spec.joint_limits["knee"][0], min_knee_flexion(spec))
     hi = spec.joint_limits["knee"][1]
-    L1, L2 = spec.shank, spec.thigh
+    L1, L2 = spec.shank_link, spec.thigh_link
+    gamma = spec.shank_tilt + spec.thigh_tilt
 
     def d(kappa):
         return float(np.sqrt(L1**2 + L2**2 + 2 * L1 * L2 * np.cos(kappa)))
 
-    return d(min(hi, np.pi)), d(max(lo, 0.0))
+    return d(min(hi + gamma, np.pi)), d(max(lo + gamma, 0.0))
 
 
 def tilt_bounds(spec: RobotSpec) -> tuple[float, float]:
@@ -283,12 +285,8 @@ def joint_gap(spec: RobotSpec, timeline: Timeline, population) -> np.ndarray:
     u, w, _, _ = leg_vectors(spec, timeline, *X.T)
     zero = np.zeros(u.shape)
     with np.errstate(invalid="ignore", divide="ignore"):
-        shank, thigh = two_link_ik(
-            (Curve(u, zero, zero), Curve(w, zero, zero)),
-            spec.shank,
-            spec.thigh,
-            timeline.t,
-            strict=False,
+        shank, thigh = leg_ik(
+            (Curve(u, zero, zero), Curve(w, zero, zero)), spec, timeline.t, strict=False
         )
     gaps = []
     limits = dict(zip(JOINT_KINDS, search_limits(spec), strict=True))

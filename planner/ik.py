@@ -19,6 +19,18 @@ the plane the joint angles follow (``joints.py`` for the signs):
 
 Rates come from the two-link Jacobian, β̇ = J⁻¹ ṗ and β̈ = J⁻¹ (p̈ − J̇ β̇), so
 q̇ and q̈ are exact (no finite differences).
+
+A knee offset k (``RobotSpec.knee_offset``: the knee axis k ahead of the hip–ankle line
+at the zero pose) keeps the IK closed-form: the ankle→knee vector is
+S (sin β_s, cos β_s) + k (cos β_s, −sin β_s) = L1' (sin(β_s + γ_s), cos(β_s + γ_s)) with
+L1' = √(S² + k²), γ_s = atan2(k, S), and the knee→hip vector likewise
+L2' (sin(β_t − γ_t), cos(β_t − γ_t)), L2' = √(T² + k²), γ_t = atan2(k, T) (S, T the
+shank and thigh along the line). ``leg_ik`` solves the two-link chain of the effective
+links L1', L2' and shifts its angles by the constants γ_s, γ_t: rates unchanged. Its
+branch keeps the effective links bent forward (φ ≥ 0), so the knee angle is at least
+−(γ_s + γ_t): a knee behind the line (k < 0) bends at least |γ_s + γ_t| on this branch
+(31° for k = −30 mm on the Bioloid's 111 mm links, 5° for −14 mm on 0.3 m links), the
+other branch, which bends it less, is not taken.
 """
 
 from __future__ import annotations
@@ -75,6 +87,39 @@ def two_link_ik(
     cw = -(shank * np.cos(bs) * vs**2 + thigh * np.cos(bt) * vt**2)
     as_, at = solve(u.a - cu, w.a - cw)
     return Curve(bs, vs, as_), Curve(bt, vt, at)
+
+
+def leg_ik(target: tuple[Curve, Curve], spec, t: np.ndarray, *, strict: bool = True):
+    """``two_link_ik`` of one leg of ``spec``, its knee offset included (module doc).
+
+    Args:
+        target: (u, w) ankle-to-hip vector in the leg plane [m], each Curve of shape (n,).
+        spec: The ``RobotSpec`` (shank, thigh, knee_offset).
+        t: Sample times [s], shape (n,), to name the sample in errors.
+        strict: Raise on an unreachable target; otherwise NaN angles there.
+
+    Returns:
+        (β_shank, β_thigh) as Curves [rad, rad/s, rad/s²]: each link's own axis (the
+        ankle→hip line at the zero pose) from the leg plane's up axis.
+    """
+    bs, bt = two_link_ik(target, spec.shank_link, spec.thigh_link, t, strict=strict)
+    # x − 0.0 and x + 0.0 are x: without a knee offset the angles are two_link_ik's, bit for bit
+    return Curve(bs.p - spec.shank_tilt, bs.v, bs.a), Curve(bt.p + spec.thigh_tilt, bt.v, bt.a)
+
+
+def leg_vector(spec, shank: np.ndarray, thigh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ankle-to-hip vector (u, w) in the leg plane [m] of link angles β_shank, β_thigh [rad].
+
+    The forward map ``leg_ik`` inverts: S (sin β_s, cos β_s) + T (sin β_t, cos β_t) plus the
+    knee offset's k (cos β_s − cos β_t, sin β_t − sin β_s).
+    """
+    u = spec.shank * np.sin(shank) + spec.thigh * np.sin(thigh)
+    w = spec.shank * np.cos(shank) + spec.thigh * np.cos(thigh)
+    k = spec.knee_offset
+    if k:  # without an offset the two-link sums, untouched
+        u = u + k * (np.cos(shank) - np.cos(thigh))
+        w = w + k * (np.sin(thigh) - np.sin(shank))
+    return u, w
 
 
 def tilted_plane_height(height: Curve, lateral, lean: Curve) -> Curve:

@@ -22,6 +22,13 @@ standing straight and each ``q`` is the MJCF joint angle (see ``joints.py``):
 (The paper's "−(π/2 + θ5)" and "−θ6" in rows 5-6 are the same idea with its own
 frame choice: the swing leg is walked down, so its angles enter with a minus sign.)
 
+Real legs put the knee axis a distance k ahead of (k > 0) or behind the hip–ankle line
+(``RobotSpec.knee_offset``). Each row then carries one more constant, b_{i-1}, a shift
+along the twisted y axis: ``T = RotX(α) · Trans(a, b, d) · RotZ(θ)``. Rows 3, 4, 6, 7
+have b = −k, +k, +k, −k (the twisted y of rows 3-4 is −x_S at q = 0, of rows 6-7 +x_S),
+every other row b = 0; with k = 0 the table is eq. (1) exactly, the frames stay
+axis-aligned at q = 0 and a link's inertia stays diagonal in its DH axes.
+
 Frame 0 sits at the stance ankle centre with x0 = z_S (up), y0 = −y_S, z0 = x_S.
 Everything is expressed in the slope frame S (x up the slope, y left, z the plane
 normal; the stance foot lies flat on the plane). ``slope_to_world`` is eq. (2)'s
@@ -56,7 +63,7 @@ ROTATION_FRAME0_IN_SLOPE = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.
 ROTATION_SOLE_IN_FRAME8 = np.array([[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [-1.0, 0.0, 0.0]])
 
 
-def dh_transform(a, alpha, d, theta) -> np.ndarray:
+def dh_transform(a, alpha, d, theta, b=0.0) -> np.ndarray:
     """Homogeneous transform of eq. (1) (Craig's modified DH), vectorised.
 
     Args:
@@ -64,18 +71,20 @@ def dh_transform(a, alpha, d, theta) -> np.ndarray:
         alpha: Link twist α_{i-1} [rad].
         d: Link offset d_i [m].
         theta: Joint angle θ_i [rad].
+        b: Shift along the twisted y axis [m] (the knee offset, module doc); 0 is eq. (1).
 
     Returns:
         T of frame i in frame i-1, shape (*broadcast, 4, 4).
     """
-    a, alpha, d, theta = np.broadcast_arrays(
-        *(np.asarray(x, dtype=float) for x in (a, alpha, d, theta))
+    a, alpha, d, theta, b = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (a, alpha, d, theta, b))
     )
     ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
     T = np.zeros(a.shape + (4, 4))
     T[..., 0, 0], T[..., 0, 1], T[..., 0, 3] = ct, -st, a
-    T[..., 1, 0], T[..., 1, 1], T[..., 1, 2], T[..., 1, 3] = st * ca, ct * ca, -sa, -sa * d
-    T[..., 2, 0], T[..., 2, 1], T[..., 2, 2], T[..., 2, 3] = st * sa, ct * sa, ca, ca * d
+    T[..., 1, 0], T[..., 1, 1], T[..., 1, 2] = st * ca, ct * ca, -sa
+    T[..., 2, 0], T[..., 2, 1], T[..., 2, 2] = st * sa, ct * sa, ca
+    T[..., 1, 3], T[..., 2, 3] = ca * b - sa * d, sa * b + ca * d
     T[..., 3, 3] = 1.0
     return T
 
@@ -110,6 +119,8 @@ class Chain:
 
     Attributes:
         a, alpha: DH constants a_{i-1} [m], α_{i-1} [rad] of rows 1..8, shape (8,).
+        b: Shift along the twisted y axis of rows 1..8 [m], shape (8,): the knee offset
+            (module doc); all 0 for a leg whose knee is on the hip–ankle line.
         d: DH offsets d_i [m] per stance side, shape (2, 8).
         theta_sign, theta_offset: θ_i = sign·q_i + offset, shape (8,).
         mass: Link masses [kg] of frames 0..8, shape (9,).
@@ -127,6 +138,7 @@ class Chain:
     com: np.ndarray
     inertia: np.ndarray
     ankle_height: float
+    b: np.ndarray
 
     @classmethod
     def from_spec(cls, spec: RobotSpec) -> Chain:
@@ -152,6 +164,8 @@ class Chain:
         d[0, 4], d[1, 4] = spec.hip_width, -spec.hip_width
         sign = np.array([-1, 1, 1, 1, -1, -1, -1, -1], dtype=float)
         offset = np.array([0, 0, 0, 0, np.pi, 0, 0, 0])
+        k = spec.knee_offset
+        b = np.array([0, 0, -k, k, 0, k, -k, 0], dtype=float)
         chain = cls(
             a,
             alpha,
@@ -162,6 +176,7 @@ class Chain:
             np.zeros((2, 9, 3)),
             np.zeros((2, 9, 3, 3)),
             spec.ankle_height,
+            b,
         )
         mass = np.array([spec.links[name].mass for _, name in CHAIN_LINKS])
         com = np.zeros((2, 9, 3))
@@ -176,10 +191,10 @@ class Chain:
                 R_i, p_i = frames[i, :3, :3], frames[i, :3, 3]
                 com[side, i] = R_i.T @ (body["origin"] + com_body - p_i)  # body axes = S at q=0
                 inertia[side, i] = R_i.T @ link.inertia_matrix @ R_i
-        return cls(a, alpha, d, sign, offset, mass, com, inertia, spec.ankle_height)
+        return cls(a, alpha, d, sign, offset, mass, com, inertia, spec.ankle_height, b)
 
     def dh_parameters(self, q: np.ndarray, stance: np.ndarray):
-        """DH (a, α, d, θ) of the 8 rows per sample, each shape (n, 8)."""
+        """DH (a, α, d, θ, b) of the 8 rows per sample, each shape (n, 8)."""
         q = np.asarray(q, dtype=float)
         theta = self.theta_sign * q + self.theta_offset
         n = q.shape[0]
@@ -188,6 +203,7 @@ class Chain:
             np.broadcast_to(self.alpha, (n, 8)),
             self.d[np.asarray(stance)],
             theta,
+            np.broadcast_to(self.b, (n, 8)),
         )
 
     def frames(self, q: np.ndarray, stance_foot: np.ndarray, stance: np.ndarray) -> np.ndarray:
@@ -213,7 +229,8 @@ class Chain:
         """``frames`` in sample-last layout, the fast path for large batches.
 
         Composes eq. (1) row by row with the sample axis contiguous:
-        R_i = R_{i-1} RotX(α) RotZ(θ), o_i = o_{i-1} + R_{i-1} (a, −sα d, cα d).
+        R_i = R_{i-1} RotX(α) RotZ(θ), o_i = o_{i-1} + R_{i-1} (a, cα b − sα d, sα b + cα d)
+        (b: the knee offset's shift, module doc).
 
         Returns:
             Rotations (10, 3, 3, n) (frame axes as columns) and origins (10, 3, n), in S.
@@ -237,6 +254,8 @@ class Chain:
             R[i + 1, :, 1] = y_twisted * ct[i] - x * st[i]
             R[i + 1, :, 2] = z_twisted
             o[i + 1] = o[i] + x * self.a[i] + z_twisted * d[i]
+            if self.b[i]:  # only where there is a knee offset: k = 0 leaves eq. (1) untouched
+                o[i + 1] += y_twisted * self.b[i]
         # swing sole: ankle_height along x8, axes (−z8, −y8, −x8)
         R[9, :, 0], R[9, :, 1], R[9, :, 2] = -R[8, :, 2], -R[8, :, 1], -R[8, :, 0]
         o[9] = o[8] + R[8, :, 0] * self.ankle_height
@@ -269,12 +288,13 @@ def _body_frames_at_zero(spec: RobotSpec, side: int) -> list[dict]:
     Body frames are S-aligned at q = 0 (see ``robots/bioloid.toml``).
     """
     lateral = -1.0 if side == LEFT else 1.0  # direction from stance hip to swing hip, along y_S
+    k = spec.knee_offset  # the knees ahead of the hip–ankle lines
     ankle = np.array([0.0, 0.0, spec.ankle_height])
-    knee = ankle + [0, 0, spec.shank]
-    hip = knee + [0, 0, spec.thigh]
+    knee = ankle + [k, 0, spec.shank]
+    hip = knee + [-k, 0, spec.thigh]
     swing_hip = hip + [0, lateral * spec.hip_width, 0]
-    swing_knee = swing_hip - [0, 0, spec.thigh]
-    swing_ankle = swing_knee - [0, 0, spec.shank]
+    swing_knee = swing_hip + [k, 0, -spec.thigh]
+    swing_ankle = swing_knee + [-k, 0, -spec.shank]
     stance_right = side != LEFT
     origins = [
         (ankle, stance_right),

@@ -385,7 +385,7 @@ def _planned_and_judged(spec: RobotSpec, params: GaitParams) -> None:
 
 def _check_reach(spec: RobotSpec, t: np.ndarray, distance: np.ndarray) -> None:
     """Raise on the first sample where a leg (stance first, then swing) cannot reach."""
-    lo, hi = abs(spec.shank - spec.thigh), spec.shank + spec.thigh
+    lo, hi = spec.leg_shortest, spec.leg_reach
     for leg in (0, 1):
         d = distance[:, leg]
         bad = (d >= hi) | (d <= lo)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.ik import tilted_plane_height, two_link_ik
+from slopewalk.planner.ik import leg_ik, tilted_plane_height
 from slopewalk.planner.joints import RIGHT, principal_angle
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
@@ -114,8 +114,7 @@ def solve_reference(
     t_flat = flat(timeline.t)
     with np.errstate(invalid="ignore", divide="ignore"):
         legs = [
-            two_link_ik(target, spec.shank, spec.thigh, t_flat, strict=strict)
-            for target in (stance_target, swing_target)
+            leg_ik(target, spec, t_flat, strict=strict) for target in (stance_target, swing_target)
         ]
     (bs, bt), (bs2, bt2) = legs
     lam = Curve(flat(lean.p), flat(lean.v), flat(lean.a))

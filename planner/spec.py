@@ -33,7 +33,7 @@ GEOMETRY_KEYS = (
     "foot_width",
 )
 # optional [geometry] keys and their defaults (a spec without them is the paper's layout)
-OPTIONAL_GEOMETRY = {"sole_offset": 0.0}
+OPTIONAL_GEOMETRY = {"sole_offset": 0.0, "knee_offset": 0.0}
 
 
 @dataclass(frozen=True)
@@ -87,6 +87,9 @@ class RobotSpec:
         foot_length, foot_width: Sole rectangle [m].
         sole_offset: Lateral offset of the sole rectangle's centre from the ankle centre,
             outward (+y for the left foot, −y for the right) [m]; 0 centres it under the ankle.
+        knee_offset: Knee axis ahead of the hip–ankle line at the zero pose (legs straight,
+            ankle under the hip) [m], negative behind; ``thigh`` and ``shank`` are then the
+            lengths along that line, the links themselves ``thigh_link``/``shank_link`` long.
         links: Inertials by link name (pelvis, thigh, shank, ankle, foot); legs as the left leg.
         joint_limits: (lower, upper) [rad] by joint kind, MJCF sign convention.
         stall_torque: Servo torque limit [N m].
@@ -114,6 +117,7 @@ class RobotSpec:
     armature: float
     friction_loss: float
     sole_offset: float = 0.0
+    knee_offset: float = 0.0
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -129,6 +133,9 @@ class RobotSpec:
         Range(-half, half, "m", high_open=True).check(
             "geometry.sole_offset", self.sole_offset, SpecError
         )
+        reach = min(self.thigh, self.shank)  # the knee stays within a link length of the line
+        knee = Range(-reach, reach, "m", high_open=True)
+        knee.check("geometry.knee_offset", self.knee_offset, SpecError)
         for kind, pair in self.joint_limits.items():
             lower, upper = pair
             for bound in pair:
@@ -168,9 +175,37 @@ class RobotSpec:
         return self.sole_offset * (1.0 - 2.0 * np.asarray(side, dtype=float))
 
     @property
+    def shank_link(self) -> float:
+        """Ankle-to-knee distance [m]: ``shank`` with the knee offset beside it."""
+        return float(np.hypot(self.shank, self.knee_offset))
+
+    @property
+    def thigh_link(self) -> float:
+        """Knee-to-hip distance [m]: ``thigh`` with the knee offset beside it."""
+        return float(np.hypot(self.thigh, self.knee_offset))
+
+    @property
+    def shank_tilt(self) -> float:
+        """Angle of the ankle→knee line ahead of the shank's own axis (ankle→hip line at the
+        zero pose) [rad]: atan2(knee_offset, shank); 0 without a knee offset."""
+        return float(np.arctan2(self.knee_offset, self.shank))
+
+    @property
+    def thigh_tilt(self) -> float:
+        """Angle of the knee→hip line behind the thigh's own axis [rad]:
+        atan2(knee_offset, thigh); 0 without a knee offset."""
+        return float(np.arctan2(self.knee_offset, self.thigh))
+
+    @property
     def leg_reach(self) -> float:
-        """Longest ankle-to-hip distance, legs straight [m]."""
-        return self.thigh + self.shank
+        """Longest ankle-to-hip distance [m]: ``shank_link + thigh_link`` (the two links in
+        line; with a knee offset the knee is then slightly bent)."""
+        return self.shank_link + self.thigh_link
+
+    @property
+    def leg_shortest(self) -> float:
+        """Shortest ankle-to-hip distance the two links allow [m]: |shank_link − thigh_link|."""
+        return abs(self.shank_link - self.thigh_link)
 
     @property
     def total_mass(self) -> float:

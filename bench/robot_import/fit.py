@@ -1,10 +1,11 @@
 """Fit a user's MJCF or URDF humanoid to the planner's legs, or refuse it in one line.
 
 The planner's leg (``docs/robot-spec.md``): at the zero pose, legs straight down, a hip
-pitch, a knee and an ankle pitch whose axes are parallel to the base body's y axis and
-lie on one vertical line, then an ankle roll whose axis is parallel to x and meets the
-ankle pitch axis (the ankle centre); both hip pitch axes are one line; the sole is flat,
-``ankle_height`` below the ankle centre. Every other joint is held at an angle.
+pitch and an ankle pitch whose axes are parallel to the base body's y axis and lie on one
+vertical line, a knee axis parallel to them, on that line or a measured distance ahead of
+or behind it (``geometry.knee_offset``), then an ankle roll whose axis is parallel to x
+and meets the ankle pitch axis (the ankle centre); both hip pitch axes are one line; the
+sole is flat, ``ankle_height`` below the ankle centre. Every other joint is held at an angle.
 
 ``fit_model`` compiles the model with MuJoCo (URDF too), poses it at its zero pose with
 the held joints at their angles (the *reference pose*), finds each leg's four joints
@@ -28,6 +29,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from slopewalk.bench.robot_import.footprint import Footprint, sole_footprint
 from slopewalk.bench.robot_import.mapfile import SIDES, RobotImportError, RobotMap
 from slopewalk.planner.spec import JOINT_LIMIT_KEYS
 
@@ -69,6 +71,7 @@ class Fit:
         geometry: The spec's [geometry] values.
         sole: Per side the sole's extent (x min, x max, y min, y max) from the ankle centre.
         misfits: (what, measured size, unit) of every difference below its tolerance.
+        footprints: Per side the sole's contact footprint (``footprint``), from the ankle.
     """
 
     model: mujoco.MjModel
@@ -84,6 +87,7 @@ class Fit:
     geometry: dict[str, float]
     sole: dict[str, tuple[float, float, float, float]]
     misfits: list[tuple[str, float, str]] = field(default_factory=list)
+    footprints: dict[str, Footprint] = field(default_factory=dict)
 
     def ankle_centre(self, side: str) -> np.ndarray:
         """The ankle centre in the base frame [m]: on the ankle pitch axis, at the roll axis's y."""
@@ -383,10 +387,9 @@ def _leg_misfits(leg: dict[str, LegJoint], side: str) -> list[tuple[str, float, 
         what = f"{side} {_WORDS[kind]} {joint.name!r} axis angle off the {_KIND_AXIS[kind]} axis"
         _refuse_or_keep(out, what, off, AXIS_TOLERANCE, "deg", 180 / np.pi)
     hip = leg["hip_pitch"].anchor
-    for kind in ("knee", "ankle_pitch"):
-        joint = leg[kind]
-        what = f"{side} {_WORDS[kind]} {joint.name!r} axis ahead of the hip pitch axis (x offset)"
-        _refuse_or_keep(out, what, joint.anchor[0] - hip[0], OFFSET_TOLERANCE, "mm", 1e3)
+    joint = leg["ankle_pitch"]  # the knee may sit off the line: geometry.knee_offset
+    what = f"{side} ankle pitch {joint.name!r} axis ahead of the hip pitch axis (x offset)"
+    _refuse_or_keep(out, what, joint.anchor[0] - hip[0], OFFSET_TOLERANCE, "mm", 1e3)
     pitch, roll = leg["ankle_pitch"], leg["ankle_roll"]
     what = f"{side} ankle roll {roll.name!r} axis above the ankle pitch axis (does not meet it)"
     _refuse_or_keep(out, what, roll.anchor[2] - pitch.anchor[2], OFFSET_TOLERANCE, "mm", 1e3)
@@ -437,17 +440,19 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
     for side in SIDES:
         leg = fit.legs[side]
         lengths[side] = (leg["hip_pitch"].anchor[2] - leg["knee"].anchor[2],
-                         leg["knee"].anchor[2] - leg["ankle_pitch"].anchor[2])  # fmt: skip
-    sole = {}
+                         leg["knee"].anchor[2] - leg["ankle_pitch"].anchor[2],
+                         leg["knee"].anchor[0] - leg["hip_pitch"].anchor[0])  # fmt: skip
+    sole, footprints = {}, {}
     for side in SIDES:
+        footprints[side] = sole_footprint(model, data, frame, fit.soles[side], ankles[side])
         bottom = min(geom_corners(model, data, frame, g)[:, 2].min() for g in fit.soles[side])
         sole[side] = sole_extent(model, data, frame, fit.soles[side], ankles[side])
         lengths[side] += (ankles[side][2] - bottom,)
-    for i, key in enumerate(("thigh", "shank", "ankle_height")):
-        what = f"{key} length left vs right"
+    for i, key in enumerate(("thigh", "shank", "knee_offset", "ankle_height")):
+        what = f"{key} left vs right"
         _refuse_or_keep(misfits, what, lengths["left"][i] - lengths["right"][i],
                         OFFSET_TOLERANCE, "mm", 1e3)  # fmt: skip
-    thigh, shank, ankle_height = lengths["left"]
+    thigh, shank, knee_offset, ankle_height = lengths["left"]
     x0, x1, y0, y1 = sole["left"]
     mirrored = np.subtract(sole["right"], (x0, x1, -y1, -y0))  # the right sole mirrors y
     _refuse_or_keep(misfits, "sole extent left vs right (mirrored)",
@@ -461,6 +466,7 @@ def _measured(fit: Fit, data, frame, misfits) -> Fit:
     geometry = {
         "thigh": thigh, "shank": shank, "hip_width": y_left - y_right,
         "ankle_height": ankle_height, "ankle_to_toe": x1, "foot_length": x1 - x0,
-        "foot_width": y1 - y0, "sole_offset": (y0 + y1) / 2,
+        "foot_width": y1 - y0, "sole_offset": (y0 + y1) / 2, "knee_offset": knee_offset,
     }  # fmt: skip
-    return replace(fit, pelvis_origin=origin, geometry=geometry, sole=sole, misfits=misfits)
+    return replace(fit, pelvis_origin=origin, geometry=geometry, sole=sole, misfits=misfits,
+                   footprints=footprints)  # fmt: skip

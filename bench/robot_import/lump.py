@@ -70,7 +70,7 @@ def link_origins(fit: Fit, side: str) -> dict[str, np.ndarray]:
     """Spec body-frame origins of one leg's links in the base frame [m] (``docs/robot-spec.md``)."""
     leg, ankle = fit.legs[side], fit.ankle_centre(side)
     hip = np.array([leg["hip_pitch"].anchor[0], ankle[1], leg["hip_pitch"].anchor[2]])
-    knee = np.array([hip[0], ankle[1], leg["knee"].anchor[2]])
+    knee = np.array([leg["knee"].anchor[0], ankle[1], leg["knee"].anchor[2]])  # knee_offset
     return {"thigh": hip, "shank": knee, "ankle": ankle, "foot": ankle}
 
 

@@ -148,6 +148,13 @@ def _geometry_notes(fit: Fit) -> list[str]:
         f"sole: the rectangle {(x1 - x0) * 1e3:.1f} x {(y1 - y0) * 1e3:.1f} mm around the sole "
         f"geoms, centred {(y0 + y1) / 2 * 1e3:+.1f} mm outward of the ankle (geometry.sole_offset)"
     )
+    knee = fit.geometry["knee_offset"]
+    notes.append(
+        f"knee: the axis {abs(knee) * 1e3:.1f} mm {'ahead of' if knee >= 0 else 'behind'} the "
+        "hip-ankle line at the zero pose (geometry.knee_offset; thigh and shank measured along "
+        "the line)"
+    )
+    notes.append(_footprint_note(fit))
     kinds = {int(fit.model.geom_type[g]) for side in SIDES for g in fit.soles[side]}
     if kinds != {int(mujoco.mjtGeom.mjGEOM_BOX)}:
         notes.append(
@@ -159,6 +166,27 @@ def _geometry_notes(fit: Fit) -> list[str]:
             "model they are held by their actuators and give under load (slopewalk robot compare)"
         )
     return notes
+
+
+def _footprint_note(fit: Fit) -> str:
+    """The left sole's contact footprint (``footprint``) and the rectangle the spec keeps."""
+    x0, x1, y0, y1 = fit.sole["left"]
+    foot = fit.footprints["left"]
+    rectangle = (x1 - x0) * (y1 - y0)
+    shape = (
+        f"a convex {len(foot.vertices)}-gon (x, y from the ankle, mm: "
+        + ", ".join(f"({x * 1e3:.1f}, {y * 1e3:.1f})" for x, y in foot.vertices)
+        + f"), {foot.area * 1e6:.0f} mm^2"
+        if len(foot.vertices) >= 3
+        else f"{len(foot.vertices)} point(s), no area"
+    )
+    larger = f"{(rectangle / foot.area - 1) * 100:.1f} % larger" if foot.area > 0 else "larger"
+    bound = "; some sole geoms by their bounding boxes (an outer bound)" if foot.bounded else ""
+    return (
+        f"sole footprint: the contact face of the left sole geoms is {shape}{bound}; the "
+        f"planner's support polygon is the rectangle around it, {rectangle * 1e6:.0f} mm^2, "
+        f"{larger}"
+    )
 
 
 def spec_toml(data: dict, header: list[str]) -> str:

@@ -244,16 +244,16 @@ def stance_rooted_xml(spec: RobotSpec, stance: int) -> str:
     mjs.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
     st, sw = SIDE_PREFIX[stance], SIDE_PREFIX[1 - stance]
     y_hip = (spec.hip_width if stance == LEFT else -spec.hip_width) / 2  # in pelvis frame
-    L1, L2 = spec.thigh, spec.shank
+    L1, L2, k = spec.thigh, spec.shank, spec.knee_offset  # the knee k ahead of the line
     # (body, link, is right leg, body pos in parent, joint pos in body, axis), q = 0 pose
     chain = [
         (f"{st}ankle", "ankle", stance, (0, 0, 0), (0, 0, 0), (-1, 0, 0)),
-        (f"{st}shank", "shank", stance, (0, 0, L2), (0, 0, -L2), (0, -1, 0)),
-        (f"{st}thigh", "thigh", stance, (0, 0, L1), (0, 0, -L1), (0, -1, 0)),
+        (f"{st}shank", "shank", stance, (k, 0, L2), (-k, 0, -L2), (0, -1, 0)),
+        (f"{st}thigh", "thigh", stance, (-k, 0, L1), (k, 0, -L1), (0, -1, 0)),
         ("pelvis", "pelvis", 0, (0, -y_hip, 0), (0, y_hip, 0), (0, -1, 0)),
         (f"{sw}thigh", "thigh", 1 - stance, (0, -y_hip, 0), (0, 0, 0), (0, 1, 0)),
-        (f"{sw}shank", "shank", 1 - stance, (0, 0, -L1), (0, 0, 0), (0, 1, 0)),
-        (f"{sw}ankle", "ankle", 1 - stance, (0, 0, -L2), (0, 0, 0), (0, 1, 0)),
+        (f"{sw}shank", "shank", 1 - stance, (k, 0, -L1), (0, 0, 0), (0, 1, 0)),
+        (f"{sw}ankle", "ankle", 1 - stance, (-k, 0, -L2), (0, 0, 0), (0, 1, 0)),
         (f"{sw}foot", "foot", 1 - stance, (0, 0, 0), (0, 0, 0), (1, 0, 0)),
     ]
     body = mjs.worldbody.add_body(name=f"{st}foot", pos=[0, 0, spec.ankle_height])
@@ -289,11 +289,14 @@ def home_pose(spec: RobotSpec) -> tuple[float, np.ndarray]:
     Returns:
         (pelvis height above the sole [m], (hip pitch, knee, ankle pitch, ankle roll) [rad]).
     """
-    reach = spec.ankle_height + spec.thigh + spec.shank
+    reach = spec.ankle_height + spec.thigh_link + spec.shank_link
     height = min(GaitParams.nominal(spec, 1.0).hip_height, reach)
-    D, L1, L2 = height - spec.ankle_height, spec.thigh, spec.shank
+    D, L1, L2 = height - spec.ankle_height, spec.thigh_link, spec.shank_link
     knee = np.pi - np.arccos(np.clip((L1**2 + L2**2 - D**2) / (2 * L1 * L2), -1, 1))
     lean = np.arccos(np.clip((L1**2 + D**2 - L2**2) / (2 * L1 * D), -1, 1))
+    if spec.knee_offset:  # the effective links' angles back to the links' own axes (ik.leg_ik)
+        gs, gt = spec.shank_tilt, spec.thigh_tilt
+        return height, np.array([gt - lean, knee - gs - gt, lean - knee + gs, 0.0])
     return height, np.array([-lean, knee, lean - knee, 0.0])
 
 
@@ -361,8 +364,9 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
     for side, pre in enumerate(SIDE_PREFIX):
         right = side == 1
         thigh = pelvis.add_body(name=f"{pre}thigh", pos=[0, -hw if right else hw, 0])
-        shank = thigh.add_body(name=f"{pre}shank", pos=[0, 0, -spec.thigh])
-        ankle = shank.add_body(name=f"{pre}ankle", pos=[0, 0, -spec.shank])
+        k = spec.knee_offset  # the knee ahead of the hip–ankle line
+        shank = thigh.add_body(name=f"{pre}shank", pos=[k, 0, -spec.thigh])
+        ankle = shank.add_body(name=f"{pre}ankle", pos=[-k, 0, -spec.shank])
         foot_body = ankle.add_body(name=f"{pre}foot")
         for body, link, kind in zip(
             (thigh, shank, ankle, foot_body), ("thigh", "shank", "ankle", "foot"), JOINT_LIMIT_KEYS,
@@ -377,10 +381,10 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
             )  # fmt: skip
             if kind in _SITE:
                 body.add_site(name=f"{pre}{_SITE[kind]}")
-        for body, length in ((thigh, spec.thigh), (shank, spec.shank)):
+        for body, x, length in ((thigh, k, spec.thigh), (shank, -k, spec.shank)):
             body.add_geom(
                 name=body.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-                fromto=[0, 0, 0, 0, 0, -length], size=[_LEG_RADIUS, 0, 0],
+                fromto=[0, 0, 0, x, 0, -length], size=[_LEG_RADIUS, 0, 0],
             )  # fmt: skip
         foot_body.add_geom(
             mjs.find_default("foot"), name=f"{pre}foot", size=half_sole,

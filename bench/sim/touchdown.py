@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from slopewalk.bench.sim.floor import foot_loads
-from slopewalk.planner.ik import two_link_ik
+from slopewalk.planner.ik import leg_ik, leg_vector
 from slopewalk.planner.joints import LEFT
 from slopewalk.planner.trajectory import Curve
 
@@ -95,11 +95,10 @@ def leg_offsets(plan, raise_: np.ndarray) -> np.ndarray:
     for leg in (0, 1):
         hip, knee, roll = q[:, 4 * leg], q[:, 4 * leg + 1], q[:, 4 * leg + 3]
         thigh, shank = hip, hip + knee  # each link's angle from the leg plane's up axis
-        u = spec.shank * np.sin(shank) + spec.thigh * np.sin(thigh)
-        w = spec.shank * np.cos(shank) + spec.thigh * np.cos(thigh)
+        u, w = leg_vector(spec, shank, thigh)
         w_short = w - raise_[:, leg] / np.cos(roll)
-        new_shank, new_thigh = two_link_ik(
-            (Curve(u, zero, zero), Curve(w_short, zero, zero)), spec.shank, spec.thigh, plan.t
+        new_shank, new_thigh = leg_ik(
+            (Curve(u, zero, zero), Curve(w_short, zero, zero)), spec, plan.t
         )
         out[:, 4 * leg] = new_thigh.p - thigh
         out[:, 4 * leg + 1] = (new_shank.p - new_thigh.p) - knee

@@ -24,7 +24,6 @@ import numpy as np
 from numba import njit
 
 from slopewalk.planner.kernel import sample as sp
-from slopewalk.planner.kernel import tables as tb
 
 _KW = {"cache": True, "error_model": "numpy", "nogil": True}
 B = sp.B
@@ -59,7 +58,7 @@ def _load(q, qd, qdd, side, sole, share, start, n, w):
 def _pass(chain, gravity, n, w):
     """FK and Newton-Euler of the loaded block; torques in the ``sample._TAU`` rows."""
     geometry, dh_a, d5, mass, com, inertia = chain
-    sp._kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
+    sp._kinematics(geometry, dh_a, d5, n, w)
     sp._outward(com, inertia, gravity, n, w)
     # double support as the int a ``tables.Blocks`` holds (a literal True would compile a
     # second ``_inward``, seconds of compiling for the same code)

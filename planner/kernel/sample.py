@@ -12,12 +12,14 @@ scalar). The maths is that of the readable modules:
 
 * gait: the piece's cubics and their derivatives (``tables``), the tilted-plane
   heights of ``ik.tilted_plane_height``;
-* IK (``ik.two_link_ik``): sines and cosines of the leg angles come from the law of
-  cosines and angle addition, no trigonometric call; the angles themselves (atan2,
-  acos) only for a plan's joint vector q. A score needs the joint angles only for
-  the joint-limit check, and takes it from tan(q/2) = sin q / (1 + cos q), which is
-  increasing in q on (−π, π): the extremes of q over the samples are those of
-  tan(q/2), turned back into angles once per individual (``run``);
+* IK (``ik.leg_ik``): sines and cosines of the leg angles come from the law of
+  cosines and angle addition, no trigonometric call (a knee offset: the effective
+  links' angles turned by the constant γ_s, γ_t, as cos/sin of γ = S/L', k/L'); the
+  angles themselves (atan2, acos) only for a plan's joint vector q. A score needs the
+  joint angles only for the joint-limit check, and takes it from
+  tan(q/2) = sin q / (1 + cos q), which is increasing in q on (−π, π): the extremes
+  of q over the samples are those of tan(q/2), turned back into angles once per
+  individual (``run``);
 * FK (``kinematics.Chain.poses``): Table I's rows with their known twists;
 * Newton-Euler (``newton_euler.inverse_dynamics_poses``) with every vector in S,
   then the DSP split of the ground wrench (``newton_euler.swing_wrench_torques``);
@@ -209,7 +211,13 @@ def _gait_ik(x, y, geometry, n, w):
     y [m] (``run._footprints``).
     """
     n = min(n, B)  # a bound on the trip count (module doc)
-    l1, l2 = geometry[tb.SHANK], geometry[tb.THIGH]
+    # the effective links and the cos/sin of their angles γ_s, γ_t to the links' own axes
+    # (``ik.leg_ik``); without a knee offset l1, l2 are shank, thigh and cos γ = 1, sin γ = 0
+    # exactly, so every turn below leaves its operands' bits as they were
+    knee = geometry[tb.KNEE_OFFSET]
+    l1, l2 = np.hypot(geometry[tb.SHANK], knee), np.hypot(geometry[tb.THIGH], knee)
+    cgs, sgs = geometry[tb.SHANK] / l1, knee / l1
+    cgt, sgt = geometry[tb.THIGH] / l2, knee / l2
     lh, lan = geometry[tb.HIP_WIDTH], geometry[tb.ANKLE_HEIGHT]
     hz, lift, tilt = x[tb.HZ], x[tb.LIFT_X], x[tb.TILT_X]
     step, sway, pelvis = x[tb.STEP_LENGTH], x[tb.SWAY_SHARE], x[tb.PELVIS]
@@ -259,14 +267,22 @@ def _gait_ik(x, y, geometry, n, w):
         hp, hv, ha = ap * sec, av * sec + ap * bv, aa * sec + 2.0 * av * bv + ap * ba
         # IK of both legs (stance: ankle → hip; swing: its ankle → hip)
         cs, ss, vs, as_, ct, st, vt, at, dst, cphi, eu, ew = _leg(hxp, hxv, hxa, hp, hv, ha, l1, l2)
-        w[_IK + j], w[_IK + B + j], w[_IK + 2 * B + j] = hxp, hp, cphi
-        w[_IK + 3 * B + j], w[_IK + 4 * B + j] = eu, ew
+        # (u, w) turned by −γ_s and (e_u, e_w) by +γ_t, so that ``joint_angles``'s atan2
+        # give the links' own angles β_s = β_s' − γ_s, β_t = β_t' + γ_t
+        w[_IK + j], w[_IK + B + j] = hxp * cgs - hp * sgs, hp * cgs + hxp * sgs
+        w[_IK + 2 * B + j] = cphi
+        w[_IK + 3 * B + j], w[_IK + 4 * B + j] = eu * cgt + ew * sgt, ew * cgt - eu * sgt
+        cs, ss = cs * cgs + ss * sgs, ss * cgs - cs * sgs
+        ct, st = ct * cgt - st * sgt, st * cgt + ct * sgt
         up, wq = hxp - sxp, hp - zp
         cs2, ss2, vs2, as2, ct2, st2, vt2, at2, dsw, cphi, eu, ew = _leg(
             up, hxv - sxv, hxa - sxa, wq, hv - zv, ha - za, l1, l2
         )
-        w[_IK + 5 * B + j], w[_IK + 6 * B + j], w[_IK + 7 * B + j] = up, wq, cphi
-        w[_IK + 8 * B + j], w[_IK + 9 * B + j] = eu, ew
+        w[_IK + 5 * B + j], w[_IK + 6 * B + j] = up * cgs - wq * sgs, wq * cgs + up * sgs
+        w[_IK + 7 * B + j] = cphi
+        w[_IK + 8 * B + j], w[_IK + 9 * B + j] = eu * cgt + ew * sgt, ew * cgt - eu * sgt
+        cs2, ss2 = cs2 * cgs + ss2 * sgs, ss2 * cgs - cs2 * sgs
+        ct2, st2 = ct2 * cgt - st2 * sgt, st2 * cgt + ct2 * sgt
         w[_DIST + j], w[_DIST + B + j] = dst, dsw
         # joint rates and accelerations in Table-I order
         w[_QD + j], w[_QD + 7 * B + j] = -lamv, -lamv
@@ -319,9 +335,11 @@ def joint_angles(w, n, out, index, base):
 
 
 @njit(**_KW)
-def _kinematics(lan, dh_a, d5, n, w):
-    """Frames 0..8 (``kinematics.Chain.poses``) and the swing sole point."""
+def _kinematics(geometry, dh_a, d5, n, w):
+    """Frames 0..8 (``kinematics.Chain.poses``, its rows' b the knee offset) and the swing
+    sole point."""
     n = min(n, B)  # a bound on the trip count (module doc)
+    lan, k = geometry[tb.ANKLE_HEIGHT], geometry[tb.KNEE_OFFSET]
     # frame 0: columns x0 = z_S, y0 = −y_S, z0 = x_S; origin at the stance ankle
     for j in range(n):
         w[_FR + j], w[_FR + B + j], w[_FR + 2 * B + j] = 0.0, 0.0, 1.0
@@ -331,14 +349,14 @@ def _kinematics(lan, dh_a, d5, n, w):
         w[_FR + 11 * B + j] = lan
     # one call per row, its index a literal, inlined (numba IR) so that every offset is
     # a constant (see ``_outward``)
-    _frame(0, dh_a[0], d5, n, w)
-    _frame(1, dh_a[1], d5, n, w)
-    _frame(2, dh_a[2], d5, n, w)
-    _frame(3, dh_a[3], d5, n, w)
-    _frame(4, dh_a[4], d5, n, w)
-    _frame(5, dh_a[5], d5, n, w)
-    _frame(6, dh_a[6], d5, n, w)
-    _frame(7, dh_a[7], d5, n, w)
+    _frame(0, dh_a[0], 0.0, d5, n, w)
+    _frame(1, dh_a[1], 0.0, d5, n, w)
+    _frame(2, dh_a[2], -k, d5, n, w)
+    _frame(3, dh_a[3], k, d5, n, w)
+    _frame(4, dh_a[4], 0.0, d5, n, w)
+    _frame(5, dh_a[5], k, d5, n, w)
+    _frame(6, dh_a[6], -k, d5, n, w)
+    _frame(7, dh_a[7], 0.0, d5, n, w)
     f = _FR + 8 * FRAME
     for j in range(n):  # swing sole: ankle_height along x8
         w[_SW + j] = w[f + 9 * B + j] + w[f + j] * lan
@@ -347,10 +365,12 @@ def _kinematics(lan, dh_a, d5, n, w):
 
 
 @njit(inline="always", **_KW)
-def _frame(i, a, d5, n, w):
-    """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, 0, d) RotZ(θ).
+def _frame(i, a, b, d5, n, w):
+    """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, b, d) RotZ(θ).
 
-    d is 0 but on row 4, where it is d5 of the sample's stance side.
+    d is 0 but on row 4, where it is d5 of the sample's stance side; b is the knee
+    offset's shift (``kinematics`` module doc), added only where it is not 0 (so a leg
+    without one keeps eq. (1)'s sums, bit for bit).
     """
     n = min(n, B)  # a bound on the trip count (module doc)
     f, g = _FR + i * FRAME, _FR + (i + 1) * FRAME  # frame i, frame i + 1
@@ -375,6 +395,11 @@ def _frame(i, a, d5, n, w):
         w[g + 4 * B + j] = yt1 * c - x1 * sn
         w[g + 7 * B + j] = yt2 * c - x2 * sn
         w[g + 2 * B + j], w[g + 5 * B + j], w[g + 8 * B + j] = zt0, zt1, zt2
+    if b != 0.0:  # the knee offset: along the twisted y axis of frame i
+        for j in range(n):
+            w[g + 9 * B + j] += b * (ca * w[f + B + j] + sa * w[f + 2 * B + j])
+            w[g + 10 * B + j] += b * (ca * w[f + 4 * B + j] + sa * w[f + 5 * B + j])
+            w[g + 11 * B + j] += b * (ca * w[f + 7 * B + j] + sa * w[f + 8 * B + j])
 
 
 @njit(inline="always", **_KW)
@@ -685,7 +710,7 @@ def evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravit
         w: Scratch (``scratch``).
     """
     _gait_ik(x, y, geometry, n, w)
-    _kinematics(geometry[tb.ANKLE_HEIGHT], dh_a, d5, n, w)
+    _kinematics(geometry, dh_a, d5, n, w)
     _outward(com, inertia, gravity, n, w)
     _inward(mass, double, n, w)
     _margin(geometry, double, n, w)

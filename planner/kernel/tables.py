@@ -43,7 +43,7 @@ PIECE_INTS = 5
 HZ, LIFT_X, TILT_X, PELVIS, STEP_LENGTH, SWAY_SHARE = range(6)
 COLUMNS = 6
 # geometry vector
-SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH, SOLE_OFFSET = range(8)
+SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH, SOLE_OFFSET, KNEE_OFFSET = range(9)
 # A block (``Blocks``): at most BLOCK samples, in rows of BLOCK floats per input: the
 # sample's time [s], then its piece's floats (T0, T1, STANCE_X, TOWARDS, the shapes:
 # the same columns as ``GaitTable.floats``, T1 replaced by the time), its stance side
@@ -190,7 +190,9 @@ class ChainTable:
 
     Attributes:
         geometry: shank, thigh, hip width, ankle height, heel, toe [m], half foot width [m],
-            sole offset [m] (the sole's centre outward of the ankle, ``RobotSpec.sole_offset``).
+            sole offset [m] (the sole's centre outward of the ankle, ``RobotSpec.sole_offset``),
+            knee offset [m] (the knee ahead of the hip–ankle line, ``RobotSpec.knee_offset``:
+            the DH rows' b, ``kinematics.Chain.b``, and the IK's effective links).
         a: DH a_{i-1} [m], (8,). d5: DH d of the swing hip row per stance side [m], (2,).
         mass: Link masses of DH frames 0..8 [kg], (9,).
         com: Link CoMs in their DH frame [m], (2, 9, 3).
@@ -212,6 +214,8 @@ class ChainTable:
         assert np.allclose(chain.alpha, _ALPHA) and np.array_equal(chain.theta_sign, _SIGN)
         assert np.allclose(chain.theta_offset, _OFFSET)
         assert not np.delete(chain.d, 4, axis=1).any()
+        k = spec.knee_offset
+        assert np.array_equal(chain.b, [0, 0, -k, k, 0, k, -k, 0])
         assert np.array_equal(chain.inertia[0], chain.inertia[1])
         diagonal = np.einsum("kii->ki", chain.inertia[0])
         off = chain.inertia[0] - np.einsum("ki,ij->kij", diagonal, np.eye(3))
@@ -226,6 +230,7 @@ class ChainTable:
                 spec.ankle_to_toe,
                 spec.foot_width / 2,
                 spec.sole_offset,
+                spec.knee_offset,
             ]
         )
         return cls(

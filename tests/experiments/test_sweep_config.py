@@ -183,11 +183,15 @@ def test_trial_id_is_the_hash_of_the_inputs_and_the_spec(tmp_path, short_robot):
             "steps": trial.steps,
             "seed": trial.seed,
             "timestep": TIMESTEP,
-            # every field, but an optional geometry key at its default (sole_offset 0) left
-            # out, so the ids of robots written before the key existed do not move
-            "spec": {k: v for k, v in asdict(trial.spec).items() if k != "sole_offset"},
+            # every field, but the optional geometry keys at their default (sole_offset,
+            # knee_offset 0) left out, so the ids of robots written before them do not move
+            "spec": {
+                k: v
+                for k, v in asdict(trial.spec).items()
+                if k not in ("sole_offset", "knee_offset")
+            },
         }
-        assert trial.spec.sole_offset == 0.0
+        assert trial.spec.sole_offset == 0.0 and trial.spec.knee_offset == 0.0
         text = json.dumps(key, sort_keys=True, default=float)
         assert trial.trial_id == hashlib.sha256(text.encode()).hexdigest()[:12]
 

@@ -1,6 +1,7 @@
 """GaitParams refuses what is not a walk, through the API, in one line with the range."""
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -66,3 +67,13 @@ def test_range_reads_like_the_interval():
     assert Range(0, 1, high_open=True).contains(0.5)
     assert not Range(0, 1).contains(NAN) and not Range(0, 1).contains("0.5")
     assert not Range(1, 10, integer=True, low_open=False).contains(2.0)
+
+
+def test_the_hip_height_bound_counts_the_knee_offset(spec):
+    """Knees 30 mm behind the leg line: the hip reaches the ankle height plus both links in
+    line, 0.032 + 2 √(0.111² + 0.03²) = 0.26196 m (by hand), and the line says how."""
+    knees = replace(spec, knee_offset=-0.03)
+    top = 0.032 + 2 * (0.111**2 + 0.03**2) ** 0.5
+    GaitParams.nominal(knees, 1.0, hip_height=top - 1e-9).check_fits(knees)
+    with pytest.raises(GaitError, match=r"\(0, 0\.262\] m .*with the knee offset k"):
+        GaitParams.nominal(knees, 1.0, hip_height=top + 1e-9).check_fits(knees)

@@ -1,10 +1,14 @@
 """Two-link IK at the edges of the leg's reach: the error names the sample, NaN when lenient."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from slopewalk.planner.errors import UnreachableError
-from slopewalk.planner.ik import two_link_ik
+from slopewalk.planner.ik import leg_ik, leg_vector, two_link_ik
 from slopewalk.planner.trajectory import Curve
 
 SHANK, THIGH = 0.08, 0.07  # [m]
@@ -42,3 +46,30 @@ def test_an_unreachable_target_is_nan_when_not_strict():
     )
     assert np.isfinite(shank.p[0]) and np.isfinite(thigh.p[0])
     assert np.isnan(shank.p[1:]).all() and np.isnan(thigh.p[1:]).all()
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(
+    knee=st.floats(-0.05, 0.05),
+    shank=st.floats(-0.2, 1.4),
+    bend=st.floats(0.05, 2.4),
+)
+def test_leg_ik_inverts_the_offset_knee_leg(spec, knee, shank, bend):
+    """The leg with its knee k off the hip–ankle line, drawn by hand (ankle → knee → hip from
+    the link angles, each link's offset turned with it): ``leg_ik`` of its hip gives back
+    the link angles, and ``leg_vector`` is that hand-drawn hip. Drawn on the branch the IK
+    takes: the knee–ankle and knee–hip lines bent forward by ``bend`` (the knee angle
+    bend − γ_s − γ_t; a knee behind the line bends at least |γ_s + γ_t| there)."""
+    spec = replace(spec, knee_offset=knee)
+    thigh = shank - (bend - spec.shank_tilt - spec.thigh_tilt)
+
+    def turned(v, angle):  # (u, w) turned as the leg plane's angles turn (u: sin, w: cos)
+        c, s = np.cos(angle), np.sin(angle)
+        return np.array([v[0] * c + v[1] * s, v[1] * c - v[0] * s])
+
+    hip = turned([knee, spec.shank], shank) + turned([-knee, spec.thigh], thigh)
+    u, w = leg_vector(spec, np.array([shank]), np.array([thigh]))
+    np.testing.assert_allclose([u[0], w[0]], hip, atol=1e-15)
+    zero = np.zeros(1)
+    bs, bt = leg_ik((Curve(u, zero, zero), Curve(w, zero, zero)), spec, zero)
+    np.testing.assert_allclose([bs.p[0], bt.p[0]], [shank, thigh], atol=1e-12)

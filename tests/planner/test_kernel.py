@@ -119,6 +119,24 @@ def test_kernel_equals_the_numpy_reference_with_a_sole_beside_the_ankle(spec, so
     _kernel_equals_reference(spec, params, Timeline.of(params), X)
 
 
+# [m] ahead of the hip–ankle line; a knee ahead lets the knee's limit fold the leg so far
+# that few of the extended box's gaits stay within the hip and ankle limits: the paper's
+@pytest.mark.parametrize("knee_offset, family", [(-0.030, "extended"), (0.014, "paper")])
+def test_kernel_equals_the_numpy_reference_with_the_knees_off_the_leg_line(
+    spec, knee_offset, family
+):
+    """Knees behind (a real humanoid's) or ahead of the hip–ankle line: the IK's effective
+    links and angle shifts, the DH rows' b, every series, the work and the minimum margin,
+    to 1e-9 of their scale, both support phases and stance sides."""
+    spec = replace(spec, knee_offset=knee_offset)
+    params = ga_params(spec, 0.9, np.deg2rad(12.0))
+    X = _population(spec, params, 8, seed=301, family=family)
+    X[:, 2] *= np.where(np.arange(len(X)) % 2, 1.0, -1.0)
+    rows = kernel_walk(spec, Timeline.of(params)).series(params.slope, X)
+    assert np.isfinite(rows[..., sm.Q : sm.Q + 8]).all()  # every individual walks
+    _kernel_equals_reference(spec, params, Timeline.of(params), X)
+
+
 @pytest.mark.parametrize("profile, share", [("hold", 0.0), ("sway", 1.0)])
 def test_six_columns_of_the_paper_family_are_its_three(spec, profile, share):
     """(Hz, Szmax, tilt) on a walk of ``profile`` is (…, 0, L, w of the profile): the kernel's

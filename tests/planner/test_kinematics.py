@@ -1,5 +1,7 @@
 """DH forward kinematics and closed-form IK against hand-derived poses and round trips."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from conftest import away_from_phase_changes
@@ -74,9 +76,34 @@ def test_slope_rotation_matches_eq2():
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
 
 
+# knees 0, 30 mm behind and 14 mm ahead of the hip–ankle line (geometry.knee_offset)
+KNEES = (0.0, -0.030, 0.014)
+
+
+@pytest.mark.parametrize("stance", [0, 1])
+@pytest.mark.parametrize("knee", KNEES[1:])
+def test_straight_legs_with_a_knee_offset(spec, stance, knee):
+    """q = 0 with the knee axis k ahead of the line: knees at (k, ·, ankle + shank) and
+    (k, ·, hip − thigh), hips and swing sole where they are without an offset."""
+    spec = replace(spec, knee_offset=knee)
+    frames = Chain.from_spec(spec).frames(np.zeros((1, 8)), np.zeros((1, 3)), np.array([stance]))
+    side = -1.0 if stance == 0 else 1.0
+    hip = spec.ankle_height + spec.shank + spec.thigh
+    knee_z = spec.ankle_height + spec.shank
+    np.testing.assert_allclose(frames[0, 3, :3, 3], [knee, 0, knee_z], atol=1e-15)
+    np.testing.assert_allclose(frames[0, 4, :3, 3], [0, 0, hip], atol=1e-15)
+    np.testing.assert_allclose(
+        frames[0, 6, :3, 3], [knee, side * spec.hip_width, knee_z], atol=1e-15
+    )
+    np.testing.assert_allclose(frames[0, 9, :3, 3], [0, side * spec.hip_width, 0], atol=1e-15)
+
+
+@pytest.mark.parametrize("knee", KNEES)
 @pytest.mark.parametrize("step_time, slope_deg, profile", [(1.0, 0.0, "hold"), (0.5, 20.0, "sway")])
-def test_fk_of_ik_returns_the_targets(spec, step_time, slope_deg, profile):
-    """Over a whole walk FK(IK(target)) puts the pelvis centre, swing sole and feet on target."""
+def test_fk_of_ik_returns_the_targets(spec, step_time, slope_deg, profile, knee):
+    """Over a whole walk FK(IK(target)) puts the pelvis centre, swing sole and feet on target
+    (with the knees off the hip–ankle line too)."""
+    spec = replace(spec, knee_offset=knee)
     params = GaitParams.nominal(spec, step_time, slope=np.deg2rad(slope_deg), tilt_profile=profile)
     plan = plan_walk(spec, params)
     chain = Chain.from_spec(spec)
@@ -106,8 +133,10 @@ def test_fk_of_ik_returns_the_targets(spec, step_time, slope_deg, profile):
     np.testing.assert_allclose(old[:, 4:6, :3, 3], frames[switch, 5:3:-1, :3, 3], atol=1e-9)
 
 
-def test_joint_rates_are_derivatives_of_angles(spec):
+@pytest.mark.parametrize("knee", KNEES[:2])
+def test_joint_rates_are_derivatives_of_angles(spec, knee):
     """q̇ and q̈ from the IK Jacobian match finite differences of q."""
+    spec = replace(spec, knee_offset=knee)
     plan = plan_walk(spec, GaitParams.nominal(spec, 0.8, dt=1e-4))
     keep = away_from_phase_changes(plan)
     qd = np.gradient(plan.q, plan.t, axis=0)
@@ -121,8 +150,10 @@ def test_unreachable_hip_height_names_time_and_distance(spec):
         plan_walk(spec, GaitParams.nominal(spec, 1.0, hip_height=0.25))
 
 
-def test_frames_are_the_product_of_eq1_transforms(spec):
+@pytest.mark.parametrize("knee", KNEES[:2])
+def test_frames_are_the_product_of_eq1_transforms(spec, knee):
     """The fast frame composition equals ⁰T₁·¹T₂⋯ of eq. (1) matrices, for random poses."""
+    spec = replace(spec, knee_offset=knee)
     rng = np.random.default_rng(11)
     n = 64
     q = rng.uniform(-1.5, 1.5, (n, 8))

@@ -7,6 +7,8 @@ stance leg, random slopes), the ``sway`` profile (rolling all the time) in singl
 support, and the total ground wrench in double support.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -38,6 +40,7 @@ def _compare(spec, slope, q, qd, qdd, stance, sole):
     return ours, (mj.tau, mj.force, mj.moment, mj.omega, mj.omega_dot)
 
 
+@pytest.mark.parametrize("knee", [0.0, -0.030])  # [m]: knees 30 mm behind the leg line too
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(
     slope=st.floats(-0.9, 0.9),
@@ -47,8 +50,10 @@ def _compare(spec, slope, q, qd, qdd, stance, sole):
     qdd=unit8,
     sole=hnp.arrays(np.float64, 2, elements=st.floats(-0.3, 0.3)),
 )
-def test_random_states_match_mj_inverse(spec, slope, stance, q, qd, qdd, sole):
-    """Every joint moving, both stance legs, slopes to ±52°: torques, ground wrench, link spin."""
+def test_random_states_match_mj_inverse(spec, knee, slope, stance, q, qd, qdd, sole):
+    """Every joint moving, both stance legs, slopes to ±52°: torques, ground wrench, link spin
+    (with ``knee``: the knee axes off the hip–ankle lines, geometry.knee_offset)."""
+    spec = replace(spec, knee_offset=knee)
     sole3 = np.array([*sole, 0.0])
     ours, mj = _compare(
         spec, slope, ANGLE_MID + ANGLE * q, RATE * qd, ACCELERATION * qdd, stance, sole3

@@ -42,6 +42,12 @@ def test_default_spec_is_the_papers_biped(spec):
             "geometry.sole_offset 0.03 m: must lie in (-0.03, 0.03) m",
         ),
         (lambda d: d["geometry"].update(sole_offset="1"), "geometry.sole_offset '1'"),
+        (
+            lambda d: d["geometry"].update(knee_offset=-0.111),
+            "geometry.knee_offset -0.111 m: must lie in (-0.111, 0.111) m",
+        ),
+        (lambda d: d["geometry"].update(knee_offset=True), "geometry.knee_offset True"),
+        (lambda d: d["geometry"].update(knee_ofset=0.01), "did you mean geometry.knee_offset?"),
     ],
 )
 def test_malformed_spec_is_refused(edit, message):

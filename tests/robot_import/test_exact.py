@@ -1,6 +1,7 @@
 """The issue's goals for an imported spec, against MuJoCo on the original model.
 
-On every test model (``tests/robots/``, written by hand, not by the twin generator):
+On every test model (``tests/robots/``, written by hand, not by the twin generator, and
+walker.xml with its knees 30 mm behind the hip–ankle line, ``geometry.knee_offset``):
 the spec's forward kinematics of the mapped chain equals MuJoCo's to 1e-9 m; the lumped
 pelvis's mass and CoM equal MuJoCo's subtree values to 1e-9; and with the held joints
 welded, the planner's Newton-Euler torques equal ``mj_inverse`` to 1e-6 relative.
@@ -27,13 +28,30 @@ MODELS = {
     "walker": (ROBOTS / "walker.xml", ROBOTS / "walker-map.toml"),
     "walker_motors": (ROBOTS / "walker_motors.urdf", ROBOTS / "walker_motors-map.toml"),
 }
+# walker.xml with both knee axes 30 mm behind the hip–ankle line (the issue measured 14-50
+# mm on public models), the ankles kept under the hips: (old, new) texts
+KNEES_BEHIND = [
+    *((f'<body name="{s}_shin" pos="0 0 -0.2">', f'<body name="{s}_shin" pos="-0.03 0 -0.2">')
+      for s in "lr"),
+    *((f'<body name="{s}_ankle_link" pos="0 0 -0.19">',
+       f'<body name="{s}_ankle_link" pos="0.03 0 -0.19">') for s in "lr"),
+]  # fmt: skip
 ANGLE = np.array([0.3, 0.6, 0.9, 0.6, 0.6, 0.9, 0.6, 0.3])  # [rad] half-ranges
 ANGLE_MID = np.array([0, 0, 0.8, 0, 0, 0.8, 0, 0])
 
 
-@pytest.fixture(scope="module", params=sorted(MODELS))
-def imported(request):
-    model, map_path = MODELS[request.param]
+@pytest.fixture(scope="module", params=[*sorted(MODELS), "walker_knees_behind"])
+def imported(request, tmp_path_factory):
+    if request.param == "walker_knees_behind":
+        text = MODELS["walker"][0].read_text()
+        for old, new in KNEES_BEHIND:
+            assert old in text
+            text = text.replace(old, new)
+        model = tmp_path_factory.mktemp("knees") / "walker_knees.xml"
+        model.write_text(text)
+        map_path = MODELS["walker"][1]
+    else:
+        model, map_path = MODELS[request.param]
     robot_map = load_map(map_path)
     fit = fit_model(model, robot_map)
     data, _ = imported_spec(fit, robot_map)
@@ -170,3 +188,18 @@ def test_sole_rectangle_equals_the_models_sole_boxes(imported):
             corners[:, 1].max(),
         ]
         np.testing.assert_allclose(got, planned, atol=1e-9, err_msg=f"stance {SIDES[stance]}")
+
+
+def test_knee_offset_is_the_models_knee_axis_off_the_leg_line(imported):
+    """geometry.knee_offset = MuJoCo's knee anchor x less the hip pitch anchor's, in the base
+    frame at the reference pose (-30 mm on the knees-behind walker, 0 on the others)."""
+    fit, spec = imported
+    data = mujoco.MjData(fit.model)
+    data.qpos[:] = fit.qpos
+    mujoco.mj_kinematics(fit.model, data)
+    R = data.xmat[fit.base].reshape(3, 3)
+    for side in SIDES:
+        leg = fit.legs[side]
+        knee, hip = (R.T @ data.xanchor[leg[k].joint] for k in ("knee", "hip_pitch"))
+        assert spec.knee_offset == pytest.approx(knee[0] - hip[0], abs=1e-12)
+    assert spec.knee_offset == pytest.approx(-0.03 if "knees" in fit.path else 0.0, abs=1e-12)

@@ -7,11 +7,13 @@ and the measured misfit.
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from slopewalk.bench.cli import main
 from slopewalk.bench.robot_import.fit import fit_model
 from slopewalk.bench.robot_import.mapfile import RobotImportError, RobotMap, load_map
+from slopewalk.bench.robot_import.write import imported_spec
 from slopewalk.planner.spec import load_spec
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
@@ -31,7 +33,7 @@ def test_detection_finds_the_legs_their_signs_and_the_geometry():
     g = fit.geometry  # the file's numbers: hips 0.12 apart, thigh 0.2, shank 0.19, ...
     expected = {"thigh": 0.2, "shank": 0.19, "hip_width": 0.12, "ankle_height": 0.04,
                 "ankle_to_toe": 0.08, "foot_length": 0.14, "foot_width": 0.07,
-                "sole_offset": 0.012}  # fmt: skip
+                "sole_offset": 0.012, "knee_offset": 0.0}  # fmt: skip
     assert g == pytest.approx(expected, abs=1e-12)
 
 
@@ -70,10 +72,42 @@ def test_refuses_a_tilted_hip_pitch_axis(tmp_path):
     assert message.startswith("left hip pitch 'l_leg_pitch' axis angle off the y axis: 20 deg")
 
 
-def test_refuses_a_knee_behind_the_hip_axis(tmp_path):
+# walker.xml with both knees 14 mm behind the hip–ankle line, the ankles kept under the hips
+KNEES_BEHIND = (
+    [f'<body name="{s}_shin" pos="0 0 -0.2">' for s in "lr"]
+    + [f'<body name="{s}_ankle_link" pos="0 0 -0.19">' for s in "lr"],
+    [f'<body name="{s}_shin" pos="-0.014 0 -0.2">' for s in "lr"]
+    + [f'<body name="{s}_ankle_link" pos="0.014 0 -0.19">' for s in "lr"],
+)
+
+
+def test_measures_knees_behind_the_hip_axis(tmp_path):
+    """Both knees 14 mm behind the hip–ankle line: carried as geometry.knee_offset, the thigh
+    and shank along the line, and the report says so."""
+    text = WALKER
+    for a, b in zip(*KNEES_BEHIND, strict=True):
+        text = text.replace(a, b)
+    path = tmp_path / "knees.xml"
+    path.write_text(text)
+    fit = fit_model(path)
+    assert fit.geometry["knee_offset"] == pytest.approx(-0.014, abs=1e-12)
+    assert (fit.geometry["thigh"], fit.geometry["shank"]) == pytest.approx((0.2, 0.19), abs=1e-12)
+    out = tmp_path / "knees.toml"
+    assert main(["robot", "import", str(path), "--out", str(out)]) == 0
+    assert load_spec(out).knee_offset == pytest.approx(-0.014, abs=1e-12)
+    assert "knee: the axis 14.0 mm behind the hip-ankle line" in out.read_text()
+
+
+def test_refuses_one_knee_behind_the_hip_axis(tmp_path):
+    """One knee off the line, the other on it: legs that are not mirror images."""
+    message = _refused(tmp_path, KNEES_BEHIND[0][1::2], KNEES_BEHIND[1][1::2])  # the right
+    assert message.startswith("knee_offset left vs right: 14 mm (tolerance 0.001 mm)")
+
+
+def test_refuses_an_ankle_ahead_of_the_hip_axis(tmp_path):
     message = _refused(tmp_path, '<body name="r_shin" pos="0 0 -0.2">',
                        '<body name="r_shin" pos="-0.014 0 -0.2">')  # fmt: skip
-    assert message.startswith("right knee 'r_knee_joint' axis ahead of the hip pitch axis")
+    assert message.startswith("right ankle pitch 'r_ank_p' axis ahead of the hip pitch axis")
     assert ": 14 mm (tolerance 0.001 mm)" in message
 
 
@@ -100,3 +134,54 @@ def test_cli_writes_a_spec_the_planner_reads(tmp_path, capsys):
     bad.write_text(WALKER.replace(NO_ROLL[0], "").replace(NO_ROLL[1], ""))
     assert main(["robot", "import", str(bad)]) == 2
     assert capsys.readouterr().err.startswith("slopewalk: error: left leg: no ankle roll joint")
+
+
+def _fitted(tmp_path, old, new):
+    """``fit_model`` of walker.xml with ``old`` (a list: in turn) replaced by ``new``."""
+    text = WALKER
+    for a, b in zip(old, new, strict=True):
+        assert a in text
+        text = text.replace(a, b)
+    path = tmp_path / "foot.xml"
+    path.write_text(text)
+    return fit_model(path)
+
+
+HEEL = '<geom class="sole" size="0.03 0.035 0.005" pos="-0.03 0.012 -0.035"/>'
+RIGHT_HEEL = '<geom class="sole" size="0.03 0.035 0.005" pos="-0.03 -0.012 -0.035"/>'
+
+
+def test_sole_footprint_of_two_boxes_is_their_hull(tmp_path):
+    """The left sole: toe box x 0..80 mm, y −23..47 mm; a heel box narrowed to 50 mm (y
+    −13..37 mm, x −60..0 mm). By hand: the hexagon (80, −23), (80, 47), (0, 47), (−60, 37),
+    (−60, −13), (0, −23), area 80·70 + 60·(70 + 50)/2 = 9200 mm²; the rectangle around it
+    140 × 70 = 9800 mm², 6.5 % larger, which the report states."""
+    narrow = '<geom class="sole" size="0.03 0.025 0.005" pos="-0.03 {} -0.035"/>'
+    fit = _fitted(tmp_path, [HEEL, RIGHT_HEEL], [narrow.format(0.012), narrow.format(-0.012)])
+    foot = fit.footprints["left"]
+    hexagon = np.array([[80, -23], [80, 47], [0, 47], [-60, 37], [-60, -13], [0, -23]]) * 1e-3
+    start = int(np.argmin(np.hypot(*(foot.vertices - hexagon[0]).T)))
+    np.testing.assert_allclose(np.roll(foot.vertices, -start, axis=0), hexagon, atol=1e-12)
+    assert foot.area == pytest.approx(9.2e-3, abs=1e-15) and not foot.bounded
+    mirrored = fit.footprints["right"].vertices * [1, -1]  # the right sole mirrors y
+    assert sorted(map(tuple, mirrored.round(12))) == sorted(map(tuple, foot.vertices.round(12)))
+    _, notes = imported_spec(fit, RobotMap())
+    line = next(n for n in notes if n.startswith("sole footprint"))
+    assert "a convex 6-gon" in line and "9200 mm^2" in line
+    assert "rectangle around it, 9800 mm^2, 6.5 % larger" in line
+
+
+def test_sole_footprint_of_a_mesh_heel_is_its_lowest_vertices(tmp_path):
+    """A heel given as a mesh (a wedge: its bottom a trapezoid 60 mm long, 70 mm wide at the
+    toe box, 30 mm at the back, 10 mm tall, stood on the same plane): its lowest vertices
+    and the toe box's corners; area by hand 80·70 + 60·(70 + 30)/2 = 8600 mm² (to MuJoCo's
+    float32 storage of mesh vertices, ~1e-8 relative)."""
+    wedge = ("-0.06 -0.003 0  -0.06 0.027 0  0 -0.023 0  0 0.047 0  "
+             "-0.06 -0.003 0.01  -0.06 0.027 0.01  0 -0.023 0.01  0 0.047 0.01")  # fmt: skip
+    mesh = '<geom type="mesh" mesh="heel" class="sole" pos="0 0 -0.04"/>'
+    asset = f'<asset><mesh name="heel" vertex="{wedge}"/></asset>\n  <worldbody>'
+    fit = _fitted(tmp_path, [HEEL, "<worldbody>"], [mesh, asset])
+    foot = fit.footprints["left"]
+    assert len(foot.vertices) == 6 and not foot.bounded
+    assert foot.area == pytest.approx(8.6e-3, rel=1e-7)
+    assert {(-60.0, -3.0), (-60.0, 27.0)} <= set(map(tuple, (foot.vertices * 1e3).round(4)))

@@ -13,6 +13,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from slopewalk.bench.sim.model import (
     SceneError,
@@ -23,7 +26,12 @@ from slopewalk.bench.sim.model import (
     write_default_mjcf,
 )
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.joints import JOINT_NAMES, MJCF_JOINTS, SIDE_PREFIX
+from slopewalk.planner.joints import (
+    JOINT_NAMES,
+    MJCF_JOINTS,
+    SIDE_PREFIX,
+    stance_swing_to_left_right,
+)
 from slopewalk.planner.kinematics import (
     CHAIN_LINKS,
     Chain,
@@ -48,7 +56,10 @@ OFFSETS = {
     "ankle": (0.001, 0.002, -0.001),
     "foot": (0.004, 0.005, -0.015),
 }
-SPECS = ("bioloid", "offset_coms")
+# knee_offset: those CoMs on legs whose knees sit 30 mm behind the hip–ankle line (a real
+# humanoid's, geometry.knee_offset), so the DH rows' b and the IK's effective links count
+KNEE_OFFSET = -0.030  # [m]
+SPECS = ("bioloid", "offset_coms", "knee_offset")
 # The nominal gait, and one of the extended family: the pelvis 12 mm ahead (leaning into
 # the slope), a 0.7-thigh step and a lean 40 % of the way from hold to sway.
 GAITS = {
@@ -67,8 +78,9 @@ def robots(spec) -> dict:
             for name, link in spec.links.items()
         },
     )
+    knee = replace(offset, knee_offset=KNEE_OFFSET)
     out = {}
-    for name, robot in zip(SPECS, (spec, offset), strict=True):
+    for name, robot in zip(SPECS, (spec, offset, knee), strict=True):
         walks = {
             (gait, s): plan_walk(
                 robot,
@@ -250,6 +262,33 @@ def test_inverse_dynamics_match_mj_inverse(robots, name, slope, gait):
     np.testing.assert_allclose(dyn.stance_moment, moment, rtol=1e-6, atol=1e-9)
 
 
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    knee=st.floats(-0.05, 0.05),
+    stance=st.integers(0, 1),
+    q=hnp.arrays(np.float64, 8, elements=st.floats(-1.2, 1.2)),
+)
+def test_random_poses_with_a_knee_offset_match_mj_kinematics(spec, knee, stance, q):
+    """Random joint angles (not a walk's), either stance leg, knees up to 50 mm off the
+    hip–ankle line: the twin's knee, ankle, hip, sole, toe and heel sites under
+    ``mj_kinematics`` are the DH frames' points, to 1e-12 m."""
+    spec = replace(spec, knee_offset=knee)
+    chain = Chain.from_spec(spec)
+    stance_arr, sole = np.array([stance]), np.zeros((1, 3))
+    frames = chain.frames(q[None], sole, stance_arr)
+    points = _planner_points(spec, frames, stance_arr, sole)
+    origin, rotation = chain.pelvis_pose(frames, stance_arr)
+    model = build_robot(spec).compile()  # full precision (the XML text keeps 6 digits)
+    data = mujoco.MjData(model)
+    data.qpos[:3] = origin[0]
+    mujoco.mju_mat2Quat(data.qpos[3:7], rotation[0].reshape(-1))
+    q_lr = stance_swing_to_left_right(q[None], stance_arr)[0]
+    data.qpos[[model.joint(name).qposadr[0] for name in MJCF_JOINTS]] = q_lr
+    mujoco.mj_kinematics(model, data)
+    worst = max(np.abs(data.site(site).xpos - p[0]).max() for site, p in points.items())
+    assert worst < 1e-12, worst
+
+
 @pytest.mark.parametrize(
     "options, message",
     [
@@ -283,9 +322,12 @@ def test_bad_stance_is_refused(spec):
         stance_rooted_xml(spec, 2)
 
 
+@pytest.mark.parametrize("knee_offset", [0.0, KNEE_OFFSET])
 @pytest.mark.parametrize("actuators", ["stiff", "servo"])
-def test_home_pose_stands_still(spec, actuators):
-    """Flat feet, no chatter: after 1 s at the home key the soles have not crept."""
+def test_home_pose_stands_still(spec, actuators, knee_offset):
+    """Flat feet, no chatter: after 1 s at the home key the soles have not crept (a knee
+    offset too: the home key's angles are those of the effective links, turned back)."""
+    spec = replace(spec, knee_offset=knee_offset)
     model = mujoco.MjModel.from_xml_string(scene_xml(spec, actuators=actuators))
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
