@@ -1,0 +1,215 @@
+"""``bands.csv`` and ``bands.md``: the envelope's boundaries under the spec's unknowns.
+
+The rows are ``experiments.envelope.bands.run_bands``'s: per family and boundary, the
+nominal spec's boundary and each estimated value's at its low and high end. The band of a
+boundary is the min–max of all of them; the value that *moves it most* is the one whose
+low, nominal and high boundaries span the most grid cells. ``boundaries.md`` quotes the
+bands from ``bands.csv`` when it lies beside it (``band_lines``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+
+from slopewalk.bench.files import atomic_path
+from slopewalk.planner.gait_search import min_knee_flexion, swing_clearance
+from slopewalk.planner.spec import RobotSpec
+from slopewalk.planner.verdict import SLIP_DISTANCE
+
+CSV_NAME = "bands.csv"
+MD_NAME = "bands.md"
+COLUMNS = ("family", "boundary", "key", "end", "value", "low", "high", "unit", "index", "at",
+           "edge", "searched")  # fmt: skip
+# boundary: (what it is, unit of its value)
+BOUNDARIES = {
+    "flat": ("fastest flat step time inside", " s"),
+    "up": ("steepest uphill slope inside at t_c = 1 s", "°"),
+    "down": ("steepest downhill slope inside at t_c = 1 s", "°"),
+}
+
+
+def admissibility(spec: RobotSpec, friction: float = 1.0) -> str:
+    """The GA's admissibility constraints with the spec's numbers, as a sentence's list."""
+    return (
+        f"the knee bent at least {min_knee_flexion(spec):.3f} rad from straight (the servo's "
+        f"compliance band, stall torque / kp), the swing lift at least "
+        f"{swing_clearance(spec) * 1e3:.1f} mm (hip width · sin 5°, the simulator's tip "
+        f"angle), the planned friction ratio |F_t|/F_n at most μ = {friction:g}, and the planned "
+        f"slide of a loaded foot at most {SLIP_DISTANCE * 1e3:g} mm (the simulator's slip "
+        "threshold), besides every pitch joint within its limits (planner/gait_search.py)"
+    )
+
+
+def write_csv(rows: list[dict], path: Path) -> Path:
+    """``bands.csv``: one row per family × boundary × (nominal | value × end)."""
+    out = io.StringIO()
+    writer = csv.DictWriter(out, COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: _cell(row.get(k)) for k in COLUMNS})
+    with atomic_path(path) as tmp:
+        tmp.write_text(out.getvalue())
+    return path
+
+
+def _cell(value) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    return f"{value:.10g}" if isinstance(value, float) else str(value)
+
+
+def read_csv(path: Path) -> list[dict]:
+    """The rows of a ``bands.csv``: ``at`` a float or None (no cell inside), ``index`` an int."""
+    rows = []
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            row["index"] = int(row["index"])
+            row["at"] = float(row["at"]) if row["at"] else None
+            row["edge"] = row["edge"] == "True"
+            rows.append(row)
+    return rows
+
+
+def _show(at, boundary: str, edge: bool = False) -> str:
+    if at is None:
+        return "none inside"
+    return f"{at:g}{BOUNDARIES[boundary][1]}" + (" (grid edge)" if edge else "")
+
+
+def summaries(rows: list[dict]) -> list[dict]:
+    """Per family × boundary: nominal, band (lo, hi), and the values that move it most.
+
+    The band's ends are grid values (None: no cell inside for some spec); the values
+    that move it most are those whose (low, nominal, high) boundaries span the most grid
+    cells, with that span; none when no value moves it.
+    """
+    out = []
+    groups: dict[tuple[str, str], list[dict]] = {}
+    for row in rows:
+        groups.setdefault((row["family"], row["boundary"]), []).append(row)
+    for (family, boundary), group in groups.items():
+        nominal = next(r for r in group if r["end"] == "nominal")
+        spans: dict[str, list[dict]] = {}
+        for r in group:
+            if r["end"] != "nominal":
+                spans.setdefault(r["key"], []).append(r)
+        reach = {}
+        for key, ends in spans.items():
+            indices = [r["index"] for r in [*ends, nominal]]
+            reach[key] = max(indices) - min(indices)
+        most = max(reach.values(), default=0)
+        ats = [r["at"] for r in group]
+        values = [a for a in ats if a is not None]
+        out.append({
+            "family": family,
+            "boundary": boundary,
+            "nominal": nominal,
+            "band": (None if None in ats else min(values), max(values) if values else None),
+            "movers": [k for k, v in reach.items() if v == most and most > 0],
+            "span": most,
+        })  # fmt: skip
+    return out
+
+
+def _band_text(s: dict) -> str:
+    lo, hi = s["band"]
+    unit = BOUNDARIES[s["boundary"]][1]
+    if lo is None and hi is None:
+        return "none inside for every spec"
+    low = "none inside" if lo is None else f"{lo:g}"
+    return f"[{low}, {hi:g}]{unit}"
+
+
+def _mover_text(s: dict, rows: list[dict]) -> str:
+    if not s["movers"]:
+        return "no value moves it"
+    parts = []
+    for key in s["movers"]:
+        ends = {r["end"]: r for r in rows if r["family"] == s["family"]
+                and r["boundary"] == s["boundary"] and r["key"] == key}  # fmt: skip
+        low, high = ends["low"], ends["high"]
+        parts.append(
+            f"{key} ({_show(low['at'], s['boundary'])} at {float(low['value']):g} "
+            f"{low['unit']}, {_show(high['at'], s['boundary'])} at "
+            f"{float(high['value']):g} {high['unit']})"
+        )
+    return "; ".join(parts)
+
+
+def band_lines(rows: list[dict]) -> list[str]:
+    """One line per family × boundary: "paper, fastest flat step time inside: 0.7 s, band
+    [0.6, 0.8] s over the spec's unknowns; moves most with ..." (boundaries.md's)."""
+    return [
+        f"- {s['family']}, {BOUNDARIES[s['boundary']][0]}: "
+        f"{_show(s['nominal']['at'], s['boundary'], s['nominal']['edge'])}, band "
+        f"{_band_text(s)} over the spec's unknowns; "
+        + ("moves most with " if s["movers"] else "")
+        + _mover_text(s, rows)
+        for s in summaries(rows)
+    ]
+
+
+def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, search, wall_s: float,
+             workers: int) -> str:  # fmt: skip
+    """``bands.md``: the summary per boundary, then every value's row."""
+    keys = {r["key"] for r in rows if r["end"] != "nominal"}
+    lines = [
+        "# The envelope's boundaries under the robot's unknowns",
+        "",
+        f"Written by `slopewalk bands` from the envelope file {source} and the `[uncertain]` "
+        f"table of the robot spec {robot} ({len(keys)} estimated values), in "
+        f"{wall_s / 60:.1f} min on {workers} workers.",
+        "",
+        "Each boundary of `boundaries.md` is searched again with the spec changed in **one** "
+        "value at a time, set to the low and then the high end of its range, every other "
+        "value at the spec's (no corners or combinations of values). *Inside*: the "
+        "envelope's max-margin GA search of the cell with the envelope's settings (population "
+        f"{search.population}, {search.generations} generations, seed {search.seed}; its best "
+        "gait re-planned at 1 ms) finds a gait whose ZMP is inside the support polygon at "
+        "every instant. The envelope also pools its min-work search's individuals, left out "
+        "here to halve the cost, so a cell inside here is inside there (same code and spec), "
+        f"not always the reverse. The GA admits only gaits with {admissibility(spec)}; a "
+        "boundary may be set by one of these rather than by the ZMP. MuJoCo plays nothing "
+        "here: these are analytic boundaries.",
+        "",
+        "A boundary is searched on the envelope's own grid, from the nominal spec's boundary "
+        "outwards while the cell is inside, else inwards (the last inside cell before the "
+        "first outside one, from the easy end: slow steps, level ground), so a band is only "
+        "as fine as the grid, and an inside cell beyond the first outside one is not looked "
+        "for. The band is the min–max over the nominal and every value's two ends; the value "
+        "that moves a boundary most spans the most grid cells. `bands.csv` holds every row "
+        "with the largest margin of each cell searched (`searched`): a margin within a few "
+        "tenths of a millimetre of 0 is a verdict a bigger GA budget might flip "
+        "(`convergence.md` checks the envelope's budget).",
+        "",
+        *band_lines(rows),
+        "",
+        "| family | boundary | value | range | at low | nominal | at high |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    nominal = {(r["family"], r["boundary"]): r for r in rows if r["end"] == "nominal"}
+    by_key: dict[tuple, dict] = {}
+    for r in rows:
+        if r["end"] != "nominal":
+            by_key.setdefault((r["family"], r["boundary"], r["key"]), {})[r["end"]] = r
+    for (family, boundary, key), ends in by_key.items():
+        low, high = ends["low"], ends["high"]
+        n = nominal[family, boundary]
+        moved = "" if low["index"] == n["index"] == high["index"] else " **"
+        lines.append(
+            f"| {family} | {boundary} | {key} | [{float(low['low']):g}, {float(low['high']):g}] "
+            f"{low['unit']} | {_show(low['at'], boundary, low['edge'])}{moved} | "
+            f"{_show(n['at'], boundary, n['edge'])} | "
+            f"{_show(high['at'], boundary, high['edge'])}{moved} |"
+        )
+    lines += ["", "**: the value moves this boundary."]
+    return "\n".join(lines) + "\n"
+
+
+def write_markdown(text: str, path: Path) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return path
