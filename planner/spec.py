@@ -264,18 +264,13 @@ def load_spec(path: str | Path | None = None) -> RobotSpec:
 def spec_from_dict(data: dict[str, Any], *, source: str = "<dict>") -> RobotSpec:
     """Build a RobotSpec from the parsed TOML tables (see ``load_spec``)."""
     try:
-        spec = _spec_from_dict(data, source)
-        if "uncertain" in data:  # refused here too: a spec file is checked whole when read
-            from slopewalk.planner.uncertainty import uncertain_values
-
-            uncertain_values(spec, data["uncertain"])
-        return spec
+        return _spec_from_dict(data, source)
     except SpecError as err:
         raise SpecError(f"robot spec {source!r}: {err}") from None
 
 
-# "uncertain": the ranges of the estimated values (planner/uncertainty.py), checked here
-# and read apart from the spec's numbers
+# "uncertain": the ranges of the estimated values, read and checked apart from the robot's
+# numbers by planner/uncertainty.py (which builds on this module, so not here)
 TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo", "uncertain")
 LINK_KEYS = ("mass", "com", "inertia")
 

@@ -22,7 +22,7 @@ from slopewalk.planner.verdict import SLIP_DISTANCE
 CSV_NAME = "bands.csv"
 MD_NAME = "bands.md"
 COLUMNS = ("family", "boundary", "key", "end", "value", "low", "high", "unit", "index", "at",
-           "edge", "searched")  # fmt: skip
+           "edge", "start_margin_mm", "searched")  # fmt: skip
 # boundary: (what it is, unit of its value)
 BOUNDARIES = {
     "flat": ("fastest flat step time inside", " s"),
@@ -69,6 +69,7 @@ def read_csv(path: Path) -> list[dict]:
             row["index"] = int(row["index"])
             row["at"] = float(row["at"]) if row["at"] else None
             row["edge"] = row["edge"] == "True"
+            row["start_margin_mm"] = float(row["start_margin_mm"])
             rows.append(row)
     return rows
 
@@ -82,9 +83,11 @@ def _show(at, boundary: str, edge: bool = False) -> str:
 def summaries(rows: list[dict]) -> list[dict]:
     """Per family × boundary: nominal, band (lo, hi), and the values that move it most.
 
-    The band's ends are grid values (None: no cell inside for some spec); the values
-    that move it most are those whose (low, nominal, high) boundaries span the most grid
-    cells, with that span; none when no value moves it.
+    The band's ends are grid values (None: no cell inside for some spec). The values that
+    move it most are those whose (low, nominal, high) boundaries span the most grid cells
+    (``span``), ordered by how far their two ends move the largest margin at the nominal
+    boundary's cell (``spread`` [mm], per key); when none moves the boundary a cell,
+    ``movers`` is empty and ``closest`` names the value of largest spread.
     """
     out = []
     groups: dict[tuple[str, str], list[dict]] = {}
@@ -92,15 +95,19 @@ def summaries(rows: list[dict]) -> list[dict]:
         groups.setdefault((row["family"], row["boundary"]), []).append(row)
     for (family, boundary), group in groups.items():
         nominal = next(r for r in group if r["end"] == "nominal")
-        spans: dict[str, list[dict]] = {}
+        ends: dict[str, list[dict]] = {}
         for r in group:
             if r["end"] != "nominal":
-                spans.setdefault(r["key"], []).append(r)
-        reach = {}
-        for key, ends in spans.items():
-            indices = [r["index"] for r in [*ends, nominal]]
-            reach[key] = max(indices) - min(indices)
-        most = max(reach.values(), default=0)
+                ends.setdefault(r["key"], []).append(r)
+        span, spread = {}, {}
+        for key, pair in ends.items():
+            indices = [r["index"] for r in [*pair, nominal]]
+            span[key] = max(indices) - min(indices)
+            margins = [r["start_margin_mm"] for r in [*pair, nominal]]
+            spread[key] = max(margins) - min(margins)
+        most = max(span.values(), default=0)
+        movers = sorted((k for k, v in span.items() if v == most and most > 0),
+                        key=lambda k: -spread[k])  # fmt: skip
         ats = [r["at"] for r in group]
         values = [a for a in ats if a is not None]
         out.append({
@@ -108,8 +115,10 @@ def summaries(rows: list[dict]) -> list[dict]:
             "boundary": boundary,
             "nominal": nominal,
             "band": (None if None in ats else min(values), max(values) if values else None),
-            "movers": [k for k, v in reach.items() if v == most and most > 0],
+            "movers": movers,
             "span": most,
+            "spread": spread,
+            "closest": max(spread, key=lambda k: spread[k]) if spread else None,
         })  # fmt: skip
     return out
 
@@ -124,19 +133,36 @@ def _band_text(s: dict) -> str:
 
 
 def _mover_text(s: dict, rows: list[dict]) -> str:
+    def ends(key):
+        return {r["end"]: r for r in rows if r["family"] == s["family"]
+                and r["boundary"] == s["boundary"] and r["key"] == key}  # fmt: skip
+
+    nominal = s["nominal"]["start_margin_mm"]
     if not s["movers"]:
-        return "no value moves it"
+        if s["closest"] is None:
+            return "no value moves it"
+        e = ends(s["closest"])
+        return (
+            f"no value moves it a grid cell; its margin there ({nominal:+.1f} mm) moves most "
+            f"with {s['closest']} ({e['low']['start_margin_mm']:+.1f} mm at "
+            f"{float(e['low']['value']):g} {e['low']['unit']}, "
+            f"{e['high']['start_margin_mm']:+.1f} mm at {float(e['high']['value']):g} "
+            f"{e['high']['unit']})"
+        )
     parts = []
     for key in s["movers"]:
-        ends = {r["end"]: r for r in rows if r["family"] == s["family"]
-                and r["boundary"] == s["boundary"] and r["key"] == key}  # fmt: skip
-        low, high = ends["low"], ends["high"]
+        e = ends(key)
+        low, high = e["low"], e["high"]
         parts.append(
             f"{key} ({_show(low['at'], s['boundary'])} at {float(low['value']):g} "
             f"{low['unit']}, {_show(high['at'], s['boundary'])} at "
-            f"{float(high['value']):g} {high['unit']})"
+            f"{float(high['value']):g} {high['unit']}; margin at the nominal boundary "
+            f"{low['start_margin_mm']:+.1f} / {nominal:+.1f} / {high['start_margin_mm']:+.1f} mm)"
         )
-    return "; ".join(parts)
+    text = "moves most with " + parts[0]
+    if len(parts) > 1:
+        text += f"; as far, by less margin: {'; '.join(parts[1:])}"
+    return text
 
 
 def band_lines(rows: list[dict]) -> list[str]:
@@ -145,9 +171,7 @@ def band_lines(rows: list[dict]) -> list[str]:
     return [
         f"- {s['family']}, {BOUNDARIES[s['boundary']][0]}: "
         f"{_show(s['nominal']['at'], s['boundary'], s['nominal']['edge'])}, band "
-        f"{_band_text(s)} over the spec's unknowns; "
-        + ("moves most with " if s["movers"] else "")
-        + _mover_text(s, rows)
+        f"{_band_text(s)} over the spec's unknowns; {_mover_text(s, rows)}"
         for s in summaries(rows)
     ]
 
@@ -180,15 +204,17 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
         "first outside one, from the easy end: slow steps, level ground), so a band is only "
         "as fine as the grid, and an inside cell beyond the first outside one is not looked "
         "for. The band is the min–max over the nominal and every value's two ends; the value "
-        "that moves a boundary most spans the most grid cells. `bands.csv` holds every row "
+        "that moves a boundary most spans the most grid cells, ties ordered by how far it "
+        "moves the margin at the nominal boundary's cell. `bands.csv` holds every row "
         "with the largest margin of each cell searched (`searched`): a margin within a few "
         "tenths of a millimetre of 0 is a verdict a bigger GA budget might flip "
         "(`convergence.md` checks the envelope's budget).",
         "",
         *band_lines(rows),
         "",
-        "| family | boundary | value | range | at low | nominal | at high |",
-        "|---|---|---|---|---|---|---|",
+        "| family | boundary | value | range | at low | nominal | at high | margin at the "
+        "nominal boundary, low / nominal / high |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     nominal = {(r["family"], r["boundary"]): r for r in rows if r["end"] == "nominal"}
     by_key: dict[tuple, dict] = {}
@@ -198,14 +224,22 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
     for (family, boundary, key), ends in by_key.items():
         low, high = ends["low"], ends["high"]
         n = nominal[family, boundary]
-        moved = "" if low["index"] == n["index"] == high["index"] else " **"
+        mark = {e: " **" if r["index"] != n["index"] else "" for e, r in ends.items()}
         lines.append(
             f"| {family} | {boundary} | {key} | [{float(low['low']):g}, {float(low['high']):g}] "
-            f"{low['unit']} | {_show(low['at'], boundary, low['edge'])}{moved} | "
+            f"{low['unit']} | {_show(low['at'], boundary, low['edge'])}{mark['low']} | "
             f"{_show(n['at'], boundary, n['edge'])} | "
-            f"{_show(high['at'], boundary, high['edge'])}{moved} |"
+            f"{_show(high['at'], boundary, high['edge'])}{mark['high']} | "
+            f"{low['start_margin_mm']:+.1f} / {n['start_margin_mm']:+.1f} / "
+            f"{high['start_margin_mm']:+.1f} mm |"
         )
-    lines += ["", "**: the value moves this boundary."]
+    lines += [
+        "",
+        "**: this end moves the boundary. The margin column: the largest margin the search "
+        "finds at the nominal spec's boundary cell (positive: inside), with the value at its "
+        "low end, the spec's, and its high end; it shows how near a value comes to moving "
+        "the boundary when it does not move it a grid cell.",
+    ]
     return "\n".join(lines) + "\n"
 
 
