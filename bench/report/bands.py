@@ -22,7 +22,7 @@ from slopewalk.planner.verdict import SLIP_DISTANCE
 CSV_NAME = "bands.csv"
 MD_NAME = "bands.md"
 COLUMNS = ("family", "boundary", "key", "end", "value", "low", "high", "unit", "index", "at",
-           "edge", "start_margin_mm", "searched")  # fmt: skip
+           "edge", "nominal_cell_margin_mm", "searched")  # fmt: skip
 # boundary: (what it is, unit of its value)
 BOUNDARIES = {
     "flat": ("fastest flat step time inside", " s"),
@@ -69,7 +69,7 @@ def read_csv(path: Path) -> list[dict]:
             row["index"] = int(row["index"])
             row["at"] = float(row["at"]) if row["at"] else None
             row["edge"] = row["edge"] == "True"
-            row["start_margin_mm"] = float(row["start_margin_mm"])
+            row["nominal_cell_margin_mm"] = float(row["nominal_cell_margin_mm"])
             rows.append(row)
     return rows
 
@@ -103,7 +103,7 @@ def summaries(rows: list[dict]) -> list[dict]:
         for key, pair in ends.items():
             indices = [r["index"] for r in [*pair, nominal]]
             span[key] = max(indices) - min(indices)
-            margins = [r["start_margin_mm"] for r in [*pair, nominal]]
+            margins = [r["nominal_cell_margin_mm"] for r in [*pair, nominal]]
             spread[key] = max(margins) - min(margins)
         most = max(span.values(), default=0)
         movers = sorted((k for k, v in span.items() if v == most and most > 0),
@@ -137,16 +137,16 @@ def _mover_text(s: dict, rows: list[dict]) -> str:
         return {r["end"]: r for r in rows if r["family"] == s["family"]
                 and r["boundary"] == s["boundary"] and r["key"] == key}  # fmt: skip
 
-    nominal = s["nominal"]["start_margin_mm"]
+    nominal = s["nominal"]["nominal_cell_margin_mm"]
     if not s["movers"]:
         if s["closest"] is None:
             return "no value moves it"
         e = ends(s["closest"])
         return (
             f"no value moves it a grid cell; its margin there ({nominal:+.1f} mm) moves most "
-            f"with {s['closest']} ({e['low']['start_margin_mm']:+.1f} mm at "
+            f"with {s['closest']} ({e['low']['nominal_cell_margin_mm']:+.1f} mm at "
             f"{float(e['low']['value']):g} {e['low']['unit']}, "
-            f"{e['high']['start_margin_mm']:+.1f} mm at {float(e['high']['value']):g} "
+            f"{e['high']['nominal_cell_margin_mm']:+.1f} mm at {float(e['high']['value']):g} "
             f"{e['high']['unit']})"
         )
     parts = []
@@ -157,7 +157,8 @@ def _mover_text(s: dict, rows: list[dict]) -> str:
             f"{key} ({_show(low['at'], s['boundary'])} at {float(low['value']):g} "
             f"{low['unit']}, {_show(high['at'], s['boundary'])} at "
             f"{float(high['value']):g} {high['unit']}; margin at the nominal boundary "
-            f"{low['start_margin_mm']:+.1f} / {nominal:+.1f} / {high['start_margin_mm']:+.1f} mm)"
+            f"{low['nominal_cell_margin_mm']:+.1f} / {nominal:+.1f} / "
+            f"{high['nominal_cell_margin_mm']:+.1f} mm)"
         )
     text = "moves most with " + parts[0]
     if len(parts) > 1:
@@ -230,8 +231,8 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
             f"{low['unit']} | {_show(low['at'], boundary, low['edge'])}{mark['low']} | "
             f"{_show(n['at'], boundary, n['edge'])} | "
             f"{_show(high['at'], boundary, high['edge'])}{mark['high']} | "
-            f"{low['start_margin_mm']:+.1f} / {n['start_margin_mm']:+.1f} / "
-            f"{high['start_margin_mm']:+.1f} mm |"
+            f"{low['nominal_cell_margin_mm']:+.1f} / {n['nominal_cell_margin_mm']:+.1f} / "
+            f"{high['nominal_cell_margin_mm']:+.1f} mm |"
         )
     lines += [
         "",

@@ -61,6 +61,10 @@ def test_a_value_the_planner_never_reads_gives_a_zero_width_band():
         job = Job("paper", "flat", key, "low", value, cells, 1, base, changed)
         rows.append(run_job(job))
     assert rows[0]["searched"]  # cells were searched
+    # the nominal row reports the margin at its own boundary cell (the first cell if none)
+    searched = dict(part.split(": ") for part in rows[0]["searched"].split("; "))
+    at = rows[0]["at"] if rows[0]["at"] is not None else cells[0][0]
+    assert searched[f"{at:g}"] == f"{rows[0]['nominal_cell_margin_mm']:+.1f} mm"
     for row in rows[1:]:
         assert (row["index"], row["at"], row["searched"]) == (
             rows[0]["index"],

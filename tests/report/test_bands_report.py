@@ -20,7 +20,7 @@ def _row(boundary, key, end, index, at, value=None, margin=1.0):
         "index": index,
         "at": at,
         "edge": False,
-        "start_margin_mm": margin,
+        "nominal_cell_margin_mm": margin,
         "searched": "",
     }
 

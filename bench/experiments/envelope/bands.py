@@ -109,9 +109,9 @@ class Job:
 
 def run_job(job: Job) -> dict:
     """Walk one boundary (``walk``); its row: the boundary's grid value (None: no cell
-    inside), whether it is the axis's last cell, the largest margin [mm] at the cell the walk
-    starts from (the nominal spec's boundary: a change too small to move the boundary a
-    grid cell still shows there), and the cells searched with their margins."""
+    inside), whether it is the axis's last cell, the largest margin [mm] at the nominal spec's
+    boundary cell (where a changed spec's walk starts: a change too small to move the
+    boundary a grid cell still shows there), and the cells searched with their margins."""
     spec_json = spec_text(job.spec)
     searched: dict[int, tuple[bool, float]] = {}
 
@@ -125,7 +125,10 @@ def run_job(job: Job) -> dict:
         return searched[i][0]
 
     i = walk(inside, len(job.cells), job.start)
-    first = min(max(job.start, 0), len(job.cells) - 1)  # the walk's first cell
+    # the cell whose margin is reported: the nominal spec's boundary (its own walk's result;
+    # the first cell when none is inside), where every changed spec's walk starts
+    first = min(max(job.start, 0), len(job.cells) - 1)
+    anchor = max(i, 0) if job.key == NOMINAL else first
     coordinate = 0 if job.boundary == "flat" else 1
     return {
         "family": job.family,
@@ -136,7 +139,7 @@ def run_job(job: Job) -> dict:
         "index": i,
         "at": job.cells[i][coordinate] if i >= 0 else None,
         "edge": i == len(job.cells) - 1,
-        "start_margin_mm": searched[first][1],
+        "nominal_cell_margin_mm": searched[anchor][1],
         "searched": "; ".join(
             f"{job.cells[k][coordinate]:g}: {m:+.1f} mm" for k, (_, m) in sorted(searched.items())
         ),
