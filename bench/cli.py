@@ -511,7 +511,8 @@ def _bands_parser(sub) -> None:
         "value of its [uncertain] table (docs/robot-spec.md) at a time set to the low and "
         "the high end of its range; write DIR/bands.csv and DIR/bands.md: the boundary at "
         "low / nominal / high per value, the band (min-max) per boundary and the value that "
-        "moves it most. No MuJoCo: analytic boundaries.",
+        "moves it most (analytic boundaries); then MuJoCo walks the boundary gaits of the "
+        "nominal spec and of the value that moves each boundary most, in every actuator mode.",
         "slopewalk bands --workers 2",
         "slopewalk bands my_envelope.toml --robot my.toml --out runs/bands",
     )

@@ -123,6 +123,49 @@ def summaries(rows: list[dict]) -> list[dict]:
     return out
 
 
+def picks(rows: list[dict]) -> list[tuple[str, str, str, str, float, int]]:
+    """The boundary cells worth walking in MuJoCo, per family × boundary: the nominal spec's
+    and, for the value that moves the boundary most (or, when none moves it, moves its
+    margin most), each end's; (family, boundary, key, end, value, index), no cell when
+    none is inside."""
+    out = []
+    for s in summaries(rows):
+        top = s["movers"][0] if s["movers"] else s["closest"]
+        chosen = [s["nominal"]] + [
+            r for r in rows if r["family"] == s["family"] and r["boundary"] == s["boundary"]
+            and r["key"] == top and r["end"] != "nominal"
+        ]  # fmt: skip
+        for r in chosen:
+            if r["index"] >= 0:
+                value = float(r["value"]) if r["value"] not in (None, "") else math.nan
+                out.append((r["family"], r["boundary"], r["key"], r["end"], value, r["index"]))
+    return out
+
+
+def played_lines(played: list[dict]) -> list[str]:
+    """bands.md's table of the boundary gaits walked in MuJoCo (``play_boundaries``'s rows)."""
+    modes = list(played[0]["verdicts"]) if played else []
+    lines = [
+        "The boundary gaits walked in MuJoCo (the envelope's own cell, `run_cell`: both "
+        "searches, the max-margin gait re-planned at 1 ms and played open loop in every "
+        "actuator mode, with the spec as changed; its margin pools both searches, so it may "
+        "exceed the table's), for the value that moves each boundary most (or its margin, "
+        "when none moves it a cell):",
+        "",
+        "| family | boundary | spec | cell | margin | " + " | ".join(modes) + " |",
+        "|---|---|---|---|---|" + "---|" * len(modes),
+    ]
+    for p in played:
+        spec = "nominal" if p["key"] == "nominal" else f"{p['key']} = {p['value']:g}"
+        cell = f"{p['step_time']:g} s, {p['slope_deg']:g}°"
+        verdicts = " | ".join(p["verdicts"][m] for m in modes)
+        lines.append(
+            f"| {p['family']} | {p['boundary']} | {spec} | {cell} | "
+            f"{p['margin_mm']:+.1f} mm | {verdicts} |"
+        )
+    return lines
+
+
 def _band_text(s: dict) -> str:
     lo, hi = s["band"]
     unit = BOUNDARIES[s["boundary"]][1]
@@ -178,8 +221,9 @@ def band_lines(rows: list[dict]) -> list[str]:
 
 
 def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, search, wall_s: float,
-             workers: int) -> str:  # fmt: skip
-    """``bands.md``: the summary per boundary, then every value's row."""
+             workers: int, played: list[dict] | None = None) -> str:  # fmt: skip
+    """``bands.md``: the summary per boundary, then every value's row; with ``played``, the
+    boundary gaits walked in MuJoCo (``played_lines``)."""
     keys = {r["key"] for r in rows if r["end"] != "nominal"}
     lines = [
         "# The envelope's boundaries under the robot's unknowns",
@@ -197,8 +241,8 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
         "every instant. The envelope also pools its min-work search's individuals, left out "
         "here to halve the cost, so a cell inside here is inside there (same code and spec), "
         f"not always the reverse. The GA admits only gaits with {admissibility(spec)}; a "
-        "boundary may be set by one of these rather than by the ZMP. MuJoCo plays nothing "
-        "here: these are analytic boundaries.",
+        "boundary may be set by one of these rather than by the ZMP. The boundaries are "
+        "analytic; MuJoCo walks only the boundary gaits of the first table below.",
         "",
         "A boundary is searched on the envelope's own grid, from the nominal spec's boundary "
         "outwards while the cell is inside, else inwards (the last inside cell before the "
@@ -213,6 +257,7 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
         "",
         *band_lines(rows),
         "",
+        *(played_lines(played) + [""] if played else []),
         "| family | boundary | value | range | at low | nominal | at high | margin at the "
         "nominal boundary, low / nominal / high |",
         "|---|---|---|---|---|---|---|---|",

@@ -125,3 +125,28 @@ def test_bands_md_marks_the_values_that_move_a_boundary():
     assert "| links.pelvis.mass | [0.05, 0.07] m | 0.7 s | 0.7 s | 0.8 s ** |" in text
     assert "| paper | down | geometry.foot_width | [0.05, 0.07] m | -5° | -5° | -5° | " in text
     assert "none inside" in text
+
+
+def test_the_gaits_walked_are_the_nominal_and_the_top_movers_ends():
+    chosen = bands.picks(ROWS)
+    assert ("paper", "flat", "nominal", "nominal", math.nan, 7)[:4] == chosen[0][:4]
+    assert chosen[1:3] == [
+        ("paper", "flat", "geometry.foot_width", "low", 0.05, 5),
+        ("paper", "flat", "geometry.foot_width", "high", 0.07, 8),
+    ]
+    # no cell inside at the low end: only the nominal and the high end are walked
+    up = [c for c in chosen if c[1] == "up"]
+    assert [c[2:4] for c in up] == [
+        ("nominal", "nominal"),
+        ("joint_limits.ankle_pitch.upper", "high"),
+    ]
+    # none moves the downhill boundary: the value that moves its margin most
+    assert [c[2] for c in chosen if c[1] == "down"][1:] == ["geometry.foot_width"] * 2
+    played = [{"family": "paper", "boundary": "flat", "key": "geometry.foot_width",
+               "end": "low", "value": 0.05, "step_time": 0.9, "slope_deg": 0.0,
+               "margin_mm": 3.71, "verdicts": {"stiff": "stable", "servo": "tip"}}]  # fmt: skip
+    lines = bands.played_lines(played)
+    assert (
+        lines[-1]
+        == "| paper | flat | geometry.foot_width = 0.05 | 0.9 s, 0° | +3.7 mm | stable | tip |"
+    )

@@ -16,8 +16,10 @@ by at least the servo's compliance band, swing lift ≥ the clearance, friction 
 planned slide ≤ the slip threshold; ``planner/gait_search.py``) and the 1 ms re-plan; the
 cell is inside when its max-margin gait has margin ≥ 0. The envelope also counts the
 individuals of its min-work search, which this leaves out to halve the cost: a cell can
-only be inside here if it is in the envelope with the same code and spec. MuJoCo plays
-nothing here.
+only be inside here if it is in the envelope with the same code and spec.
+
+``play_boundaries`` then walks a few boundary cells in MuJoCo as the envelope does
+(``run_cell``): the simulated verdicts of the boundary gaits.
 
 The search of one boundary (``walk``) runs along the envelope's own grid, from the easy
 end outwards (flat: step times from the slowest; uphill: slopes from 0° up; downhill: from
@@ -212,3 +214,73 @@ def run_bands(
     order = {(j.family, j.boundary, j.key, j.end): i for i, j in enumerate(jobs)}
     changed.sort(key=lambda r: order[r["family"], r["boundary"], r["key"], r["end"]])
     return nominal + changed, time.perf_counter() - start
+
+
+@dataclass(frozen=True)
+class Play:
+    """One boundary cell to walk in MuJoCo: the cell of ``job``'s axis at ``index``, with the
+    job's spec (the nominal, or one value at one end)."""
+
+    job: Job
+    index: int
+
+
+def play_cell(play: Play) -> dict:
+    """The envelope's own cell (``run_cell``: both searches, the 1 ms re-plan, every actuator
+    mode of the envelope) at a boundary, with the job's spec; the max-margin gait's row:
+    its margin [mm] and its simulated verdict per mode."""
+    from slopewalk.bench.experiments.envelope.cell import run_cell
+    from slopewalk.bench.tables.envelope import sim_columns
+
+    job = play.job
+    t, s = job.cells[play.index]
+    cell = replace(job.cell, step_time=t, slope_deg=s, spec=job.spec,
+                   spec_json=spec_text(job.spec))  # fmt: skip
+    row = run_cell(cell)
+    if is_failure(row.get("error")):
+        raise EnvelopeError(f"{cell.label} ({job.key} {job.end}): {row['error']}")
+    return {
+        "family": job.family,
+        "boundary": job.boundary,
+        "key": job.key,
+        "end": job.end,
+        "value": job.value,
+        "step_time": t,
+        "slope_deg": s,
+        "margin_mm": float(row["maxmargin_margin_mm"]),
+        "verdicts": {m: row[sim_columns("maxmargin", m)[0]] for m in cell.modes},
+    }
+
+
+def play_boundaries(
+    config: EnvelopeConfig,
+    spec: RobotSpec,
+    picks: Sequence[tuple[str, str, str, str, float, int]],
+    *,
+    workers: int | None = None,
+    quiet: bool = False,
+) -> list[dict]:
+    """Walk in MuJoCo the boundary gaits of ``picks``: (family, boundary, key, end, value,
+    index of the boundary cell on the axis), key "nominal" for the spec itself; rows of
+    ``play_cell`` in the order of ``picks``."""
+    plays = []
+    for family, boundary, key, end, value, index in picks:
+        changed = spec if key == NOMINAL else spec_at(spec, key, value)
+        cells = tuple(axis(config, boundary))
+        job = Job(family, boundary, key, end, value, cells, index,
+                  _base_cell(config, family), changed)  # fmt: skip
+        plays.append(Play(job, index))
+    rows: list[dict | None] = [None] * len(plays)
+    with LocalPool(play_cell, workers=workers or os.cpu_count() or 1) as pool:
+        for key, result in pool.run((str(i), (p,)) for i, p in enumerate(plays)):
+            if isinstance(result, Lost) or not isinstance(result, dict):
+                raise EnvelopeError(f"a bands worker was lost: {result}")
+            rows[int(key)] = result
+            if not quiet:
+                print(
+                    f"  played {result['family']} {result['boundary']} {result['key']} "
+                    f"{result['end']}: {result['verdicts']}",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    return [r for r in rows if r is not None]
