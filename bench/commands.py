@@ -639,7 +639,12 @@ def bands(args: argparse.Namespace) -> None:
     import time
     from pathlib import Path
 
-    from slopewalk.bench.experiments.envelope.bands import play_boundaries, run_bands
+    from slopewalk.bench.experiments.envelope.bands import (
+        CONVERGENCE_FACTOR,
+        converge_boundaries,
+        play_boundaries,
+        run_bands,
+    )
     from slopewalk.bench.experiments.envelope.config import EnvelopeError, load_envelope
     from slopewalk.bench.files import check_output_dir
     from slopewalk.bench.report import bands as report
@@ -658,12 +663,14 @@ def bands(args: argparse.Namespace) -> None:
     rows, wall_s = run_bands(config, spec, uncertain, workers=args.workers)
     start = time.perf_counter()
     played = play_boundaries(config, spec, report.picks(rows), workers=args.workers)
+    checked = converge_boundaries(config, spec, report.picks(rows), workers=args.workers)
     wall_s += time.perf_counter() - start
     workers = args.workers or os.cpu_count() or 1
     report.write_csv(rows, out / report.CSV_NAME)
     text = report.markdown(rows, source=config.source, robot=robot, spec=spec,
                            search=config.search, wall_s=wall_s, workers=workers,
-                           played=played)  # fmt: skip
+                           played=played, checked=checked,
+                           factor=CONVERGENCE_FACTOR)  # fmt: skip
     report.write_markdown(text, out / report.MD_NAME)
     print("\n".join(report.band_lines(rows)))
     print(f"wrote {out / report.CSV_NAME} and {out / report.MD_NAME} in {wall_s:.0f} s")

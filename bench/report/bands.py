@@ -166,6 +166,25 @@ def played_lines(played: list[dict]) -> list[str]:
     return lines
 
 
+def convergence_lines(checked: list[dict], factor: int) -> list[str]:
+    """bands.md's paragraph on the GA budget: the walked boundary cells and the first cell
+    beyond each (``converge_boundaries``'s rows), searched with ``factor`` × the generations."""
+    flips = [c for c in checked if c["inside"] != c["inside_big"]]
+    change = max(checked, key=lambda c: abs(c["margin_big_mm"] - c["margin_mm"]))
+    nearest = min(checked, key=lambda c: abs(c["margin_mm"]))
+    unit = BOUNDARIES[change["boundary"]][1]
+    return [
+        f"Convergence: the {len(checked)} cells of the walked boundaries and the first cell "
+        f"beyond each, searched again with {factor} × the generations: {len(flips)} inside / "
+        "outside verdicts change; the largest margin change is "
+        f"{change['margin_big_mm'] - change['margin_mm']:+.2f} mm ({change['boundary']} "
+        f"{change['at']:g}{unit}, {change['key']} {change['end']}); the margin nearest 0 is "
+        f"{nearest['margin_mm']:+.2f} mm ({nearest['margin_big_mm']:+.2f} mm at {factor} ×; "
+        f"{nearest['boundary']} {nearest['at']:g}{BOUNDARIES[nearest['boundary']][1]}, "
+        f"{nearest['key']} {nearest['end']}).",
+    ]
+
+
 def _band_text(s: dict) -> str:
     lo, hi = s["band"]
     unit = BOUNDARIES[s["boundary"]][1]
@@ -221,7 +240,8 @@ def band_lines(rows: list[dict]) -> list[str]:
 
 
 def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, search, wall_s: float,
-             workers: int, played: list[dict] | None = None) -> str:  # fmt: skip
+             workers: int, played: list[dict] | None = None, checked: list[dict] | None = None,
+             factor: int = 4) -> str:  # fmt: skip
     """``bands.md``: the summary per boundary, then every value's row; with ``played``, the
     boundary gaits walked in MuJoCo (``played_lines``)."""
     keys = {r["key"] for r in rows if r["end"] != "nominal"}
@@ -258,6 +278,7 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
         *band_lines(rows),
         "",
         *(played_lines(played) + [""] if played else []),
+        *(convergence_lines(checked, factor) + [""] if checked else []),
         "| family | boundary | value | range | at low | nominal | at high | margin at the "
         "nominal boundary, low / nominal / high |",
         "|---|---|---|---|---|---|---|---|",

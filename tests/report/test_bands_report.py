@@ -150,3 +150,15 @@ def test_the_gaits_walked_are_the_nominal_and_the_top_movers_ends():
         lines[-1]
         == "| paper | flat | geometry.foot_width = 0.05 | 0.9 s, 0° | +3.7 mm | stable | tip |"
     )
+
+
+def test_the_convergence_paragraph_counts_flips_and_the_largest_change():
+    def c(at, small, big):
+        return {"family": "paper", "boundary": "up", "key": "nominal", "end": "nominal",
+                "at": at, "margin_mm": small, "inside": small >= 0,
+                "margin_big_mm": big, "inside_big": big >= 0}  # fmt: skip
+
+    (line,) = bands.convergence_lines([c(25.0, 1.4, 1.5), c(30.0, -0.2, 0.3), c(22.5, 5.0, 4.0)], 4)
+    assert "the 3 cells" in line and ": 1 inside / outside verdicts change" in line
+    assert "largest margin change is -1.00 mm (up 22.5°, nominal nominal)" in line
+    assert "nearest 0 is -0.20 mm (+0.30 mm at 4 ×; up 30°" in line

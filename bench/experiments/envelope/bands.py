@@ -284,3 +284,57 @@ def play_boundaries(
                     flush=True,
                 )
     return [r for r in rows if r is not None]
+
+
+CONVERGENCE_FACTOR = 4  # generations of the convergence check, × the envelope's
+
+
+def converge_cell(play: Play) -> dict:
+    """The cell of ``play`` searched as ``run_job`` does, and again with
+    ``CONVERGENCE_FACTOR`` × the generations: its row (boundary, key, end, the cell, the
+    margin [mm] and verdict of each budget)."""
+    job = play.job
+    t, s = job.cells[play.index]
+    out = {
+        "family": job.family,
+        "boundary": job.boundary,
+        "key": job.key,
+        "end": job.end,
+        "at": job.cells[play.index][0 if job.boundary == "flat" else 1],
+    }
+    small = job.cell.search
+    big = replace(small, generations=CONVERGENCE_FACTOR * small.generations)
+    for name, search in (("", small), ("_big", big)):
+        cell = replace(job.cell, step_time=t, slope_deg=s, search=search, spec=job.spec,
+                       spec_json=spec_text(job.spec))  # fmt: skip
+        row = run_cell_stability(cell)
+        if is_failure(row.get("error")):
+            raise EnvelopeError(f"{cell.label} ({job.key} {job.end}): {row['error']}")
+        out[f"margin{name}_mm"] = float(row["maxmargin_margin_mm"])
+        out[f"inside{name}"] = bool(row["feasible"])
+    return out
+
+
+def converge_boundaries(
+    config: EnvelopeConfig,
+    spec: RobotSpec,
+    picks: Sequence[tuple[str, str, str, str, float, int]],
+    *,
+    workers: int | None = None,
+) -> list[dict]:
+    """``converge_cell`` of each boundary cell of ``picks`` (as ``play_boundaries``) and of
+    the first cell beyond it, where the boundary's verdicts flip."""
+    plays = []
+    for family, boundary, key, end, value, index in picks:
+        changed = spec if key == NOMINAL else spec_at(spec, key, value)
+        cells = tuple(axis(config, boundary))
+        job = Job(family, boundary, key, end, value, cells, index,
+                  _base_cell(config, family), changed)  # fmt: skip
+        plays += [Play(job, i) for i in (index, index + 1) if i < len(cells)]
+    rows: list[dict | None] = [None] * len(plays)
+    with LocalPool(converge_cell, workers=workers or os.cpu_count() or 1) as pool:
+        for key, result in pool.run((str(i), (p,)) for i, p in enumerate(plays)):
+            if isinstance(result, Lost) or not isinstance(result, dict):
+                raise EnvelopeError(f"a bands worker was lost: {result}")
+            rows[int(key)] = result
+    return [r for r in rows if r is not None]
