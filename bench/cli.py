@@ -500,6 +500,40 @@ def _envelope_parser(sub) -> None:
     p.set_defaults(run=commands.envelope)
 
 
+def _bands_parser(sub) -> None:
+    p = _command(
+        sub,
+        "bands",
+        "the envelope's boundaries with each estimated robot value at either end of its range",
+        "For each boundary of the envelope (per gait family: the fastest flat step time with "
+        "a gait inside, the steepest uphill and downhill slope inside at 1 s steps), search it "
+        "again with the envelope's GA, once with the robot spec as it is and then with one "
+        "value of its [uncertain] table (docs/robot-spec.md) at a time set to the low and "
+        "the high end of its range; write DIR/bands.csv and DIR/bands.md: the boundary at "
+        "low / nominal / high per value, the band (min-max) per boundary and the value that "
+        "moves it most (analytic boundaries); then MuJoCo walks the boundary gaits of the "
+        "nominal spec and of the value that moves each boundary most, in every actuator mode.",
+        "slopewalk bands --workers 2",
+        "slopewalk bands my_envelope.toml --robot my.toml --out runs/bands",
+    )
+    p.add_argument(
+        "config",
+        nargs="?",
+        metavar="CONFIG",
+        help="envelope TOML whose grid and GA settings are used (default: "
+        "bench/experiments/envelopes/paper.toml)",
+    )
+    p.add_argument("--out", metavar="DIR", help="output directory (default: ./results/envelope)")
+    p.add_argument(
+        "--workers",
+        type=integer(WORKERS),
+        metavar="N",
+        help=f"local worker processes, in {WORKERS} (default: all cores)",
+    )
+    add_robot_flag(p)
+    p.set_defaults(run=commands.bands)
+
+
 def _benchmark_parser(sub) -> None:
     p = _command(
         sub,
@@ -534,6 +568,7 @@ COMMANDS = (  # one builder per subcommand, in the order `slopewalk --help` list
     _fidelity_parser,
     _cop_error_parser,
     _envelope_parser,
+    _bands_parser,
     _benchmark_parser,
     lambda sub: add_regenerate_parser(sub, _command),
 )
@@ -574,6 +609,7 @@ COMPILES = {
     "cop_error": _TRIAL,
     "optimize": ("scores", "plan"),
     "envelope": ("scores", *_TRIAL),
+    "bands": ("scores", "plan"),
 }
 
 

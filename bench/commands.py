@@ -634,6 +634,48 @@ def envelope(args: argparse.Namespace) -> None:
         _envelope_report(out, summary.table)
 
 
+def bands(args: argparse.Namespace) -> None:
+    """``slopewalk bands``: the envelope's boundaries under the spec's unknowns."""
+    import time
+    from pathlib import Path
+
+    from slopewalk.bench.experiments.envelope.bands import (
+        CONVERGENCE_FACTOR,
+        converge_boundaries,
+        play_boundaries,
+        run_bands,
+    )
+    from slopewalk.bench.experiments.envelope.config import EnvelopeError, load_envelope
+    from slopewalk.bench.files import check_output_dir
+    from slopewalk.bench.report import bands as report
+    from slopewalk.planner.spec import default_spec_path, load_spec
+    from slopewalk.planner.uncertainty import load_uncertainty
+
+    config = load_envelope(args.config)
+    spec = load_spec(args.robot)
+    uncertain = load_uncertainty(args.robot)
+    robot = args.robot or "planner/robots/bioloid.toml"
+    if not uncertain:
+        path = args.robot or default_spec_path()
+        raise EnvelopeError(f"robot spec {str(path)!r}: no [uncertain] table to take bands over")
+    out = check_output_dir(args.out or Path.cwd() / "results" / "envelope")
+    out.mkdir(parents=True, exist_ok=True)
+    rows, wall_s = run_bands(config, spec, uncertain, workers=args.workers)
+    start = time.perf_counter()
+    played = play_boundaries(config, spec, report.picks(rows), workers=args.workers)
+    checked = converge_boundaries(config, spec, report.picks(rows), workers=args.workers)
+    wall_s += time.perf_counter() - start
+    workers = args.workers or os.cpu_count() or 1
+    report.write_csv(rows, out / report.CSV_NAME)
+    text = report.markdown(rows, source=config.source, robot=robot, spec=spec,
+                           search=config.search, wall_s=wall_s, workers=workers,
+                           played=played, checked=checked,
+                           factor=CONVERGENCE_FACTOR)  # fmt: skip
+    report.write_markdown(text, out / report.MD_NAME)
+    print("\n".join(report.band_lines(rows)))
+    print(f"wrote {out / report.CSV_NAME} and {out / report.MD_NAME} in {wall_s:.0f} s")
+
+
 def _envelope_report(out, table) -> None:
     """Rewrite the claims table of the sweep beside ``out`` with the envelope's claims."""
     results = out.parent

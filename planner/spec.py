@@ -304,7 +304,9 @@ def spec_from_dict(data: dict[str, Any], *, source: str = "<dict>") -> RobotSpec
         raise SpecError(f"robot spec {source!r}: {err}") from None
 
 
-TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo")
+# "uncertain": the ranges of the estimated values, read and checked apart from the robot's
+# numbers by planner/uncertainty.py (which builds on this module, so not here)
+TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo", "uncertain")
 LINK_KEYS = ("mass", "com", "inertia")
 
 

@@ -330,8 +330,10 @@ def _walked_interval_lines(rows) -> list[str]:
     return lines
 
 
-def boundaries_markdown(rows, source: str) -> str:
-    """``boundaries.md``: ``family_boundaries`` as a table, one row per family."""
+def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> str:
+    """``boundaries.md``: ``family_boundaries`` as a table, one row per family, the GA's
+    admissibility constraints that shape them, and their bands over the spec's unknowns
+    (``bands``: the rows of a ``bands.csv``, ``report.bands``; None: where to find them)."""
 
     def show(value, unit, edge=None):
         text = "none" if value is None else f"{value:g}{unit}"
@@ -365,9 +367,37 @@ def boundaries_markdown(rows, source: str) -> str:
     lines += [
         "",
         "*(grid edge)*: the boundary lies at or beyond the grid's last step time or slope.",
+        "",
+        *_shaping_lines(bands),
         *_walked_interval_lines(rows),
     ]
     return "\n".join(lines) + "\n"
+
+
+def _shaping_lines(bands: list[dict] | None) -> list[str]:
+    """What shapes the *inside* boundaries besides the ZMP, and how far they move with what
+    the spec only estimates."""
+    from slopewalk.bench.report.bands import MD_NAME, admissibility, band_lines
+    from slopewalk.planner.spec import load_spec
+
+    lines = [
+        "*Inside* also needs what the GA admits: gaits with "
+        f"{admissibility(load_spec())}; a boundary may be set by one of these rather than by "
+        "the ZMP.",
+        "",
+    ]
+    if bands is None:
+        return lines + [
+            f"Their bands over the values the robot spec only estimates: `slopewalk bands` "
+            f"writes {MD_NAME} beside this file.",
+        ]
+    return lines + [
+        f"Over the values the robot spec only estimates ({MD_NAME}, `slopewalk bands`: each "
+        "boundary searched again with one estimated value at a time at either end of its "
+        "range; the nominal there is that search's own, with the envelope's GA settings):",
+        "",
+        *band_lines(bands),
+    ]
 
 
 FIGURE_NAME = "envelope.png"
@@ -383,6 +413,10 @@ def write_envelope_documents(table: str | Path, out_dir: str | Path, source: str
     out_dir = Path(out_dir)
     figure = write_figure(table, out_dir / FIGURE_NAME)
     boundaries = out_dir / BOUNDARIES_NAME
+    from slopewalk.bench.report.bands import CSV_NAME, read_csv
+
+    bands_csv = out_dir / CSV_NAME  # `slopewalk bands` writes it beside the envelope
+    bands = read_csv(bands_csv) if bands_csv.is_file() else None
     with atomic_path(boundaries) as tmp:
-        tmp.write_text(boundaries_markdown(read_table(table), source))
+        tmp.write_text(boundaries_markdown(read_table(table), source, bands))
     return [figure, boundaries]

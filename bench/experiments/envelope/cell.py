@@ -222,6 +222,26 @@ def run_cell_search(cell: EnvelopeCell, record_dir: str | None = None) -> dict:
     return run_cell(cell, None, simulate=False)
 
 
+def run_cell_stability(cell: EnvelopeCell) -> dict:
+    """The cell's first question alone: the max-margin search (treatment ``stability``, the
+    cell's GA settings) and the 1 ms re-plan of its best gait (``_choose``), no min-work
+    search, no MuJoCo. Its row: ``feasible``, the ``maxmargin_*`` columns, ``error``.
+
+    ``slopewalk bands`` asks this of many specs; without the min-work search's individuals
+    its max margin can only be ≤ ``run_cell``'s (the same search, a smaller pool).
+    """
+    from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
+
+    s = cell.search
+    settings = {"population": s.population, "generations": s.generations, "seed": s.seed}
+    stable = run_ga(cell.problem(), GaSettings(**settings, constraint="stability"))
+    pool = _Pool.of(stable, None, 0.0)
+    row = {"error": ""} | _choose(
+        cell, "maxmargin", pool, pool.most_stable(), stable.best, 0.0, None, False
+    )
+    return row | {"feasible": row["maxmargin_found"]}
+
+
 def _run(cell: EnvelopeCell, record_dir: str | None, simulate: bool) -> dict:
     from slopewalk.bench.experiments.ga.search import GaSettings, run_ga
 
@@ -266,6 +286,11 @@ class _Pool:
 
     @classmethod
     def of(cls, stable, cheap, required: float) -> _Pool:
+        """The pool of both searches; ``cheap`` None: of the max-margin search alone."""
+        if cheap is None:
+            a = stable.log
+            return cls(a["X"], a["work"], a["margin"], a["gap"], a["friction_gap"],
+                       a["slide_gap"])  # fmt: skip
         a, b = stable.log, cheap.log
         return cls(
             np.concatenate([a["X"], b["X"]]),
