@@ -19,7 +19,19 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   ``SLIP_DISTANCE``, the simulator's slip threshold.
 * ``foot_slide``: the plan itself moves a loaded foot along the plane (the rear
   foot in double support drifts sideways by hip width × (1/cos λ − 1) as the lean
-  changes, with no hip roll to absorb it) by more than ``SLIP_DISTANCE``.
+  changes, with no hip roll to absorb it) by more than ``SLIP_DISTANCE`` within one
+  loaded stretch of that foot as the simulator counts it. On a rigid floor
+  (``contact_time`` None) the foot stays loaded through the drag: the stretch is the
+  whole loaded run (``planned_slide``). On MuJoCo's soft floor it does not: dragged
+  at the friction limit by the position-stiff legs (the frontal chain has no roll
+  joint to give), the sole chatters, touching in contacts that carry the load for at
+  most about the contact's time constant τ (``solref``) and leave it in the air
+  between them (measured, ``tests/sim/test_double_support_drag.py``: contacts of
+  1–13 ms at τ = 20 ms, each sliding ≤ 0.35 mm). A loaded stretch then slides at most
+  as far as the plan moves the foot in τ (``stretch_slide``): 5 mm needs a drag of
+  250 mm/s at τ = 20 ms, ~10× the fastest planned drift. Not modelled: the foot's
+  stretches where it sticks (|F_t| < μ F_n) at the run's ends, where it creeps with
+  the contact's and the legs' give (measured ≤ 1.5 mm).
 
 * ``saturation``: the loop asks a servo for more torque than its limit (the stall
   torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
@@ -155,23 +167,56 @@ def _first_past(t, series, threshold: float, kind: str, describe) -> list[Predic
     return [PredictedEvent(float(t[over[0]]), kind, describe())] if over.size else []
 
 
-def foot_slide_events(plan) -> list[PredictedEvent]:
-    """``foot_slide`` where the plan moves its loaded second foot in DSP past SLIP_DISTANCE."""
+def foot_slide_events(plan, contact_time: float | None = None) -> list[PredictedEvent]:
+    """``foot_slide`` where a loaded stretch of the second foot in DSP slides past SLIP_DISTANCE.
+
+    Args:
+        plan: The planned walk.
+        contact_time: The floor contact's time constant τ [s] (MuJoCo's ``solref``): a
+            foot dragged at the friction limit stays loaded at most that long per
+            stretch (module doc). None: a rigid floor, loaded through the whole run.
+    """
+    if contact_time is not None and not contact_time > 0:
+        raise SlopewalkError(f"foot_slide_events: contact_time {contact_time!r} s must be > 0")
     worst, when = 0.0, None
     for start, moved in _loaded_runs(plan):
+        if contact_time is not None:
+            end = start + moved.size
+            moved = stretch_slide(plan.t[start:end], plan.swing_sole[start:end, :2], contact_time)
         over = np.flatnonzero(moved > SLIP_DISTANCE)
         if over.size and moved.max() > worst:
             worst, when = float(moved.max()), float(plan.t[start + over[0]])
     if when is None:
         return []
+    stretch = (
+        "in double support"
+        if contact_time is None
+        else (f"within one contact time ({contact_time * 1e3:g} ms) in double support")
+    )
     return [
         PredictedEvent(
             when,
             "foot_slide",
-            f"the plan slides a loaded foot {worst * 1e3:.1f} mm along the plane in double "
-            f"support (threshold {SLIP_DISTANCE * 1e3:g} mm)",
+            f"the plan slides a loaded foot {worst * 1e3:.1f} mm along the plane {stretch} "
+            f"(threshold {SLIP_DISTANCE * 1e3:g} mm)",
         )
     ]
+
+
+def stretch_slide(t, xy, contact_time: float) -> np.ndarray:
+    """Farthest the path ``xy`` [m], (n, 2), at times ``t`` [s], (n,), moves within
+    ``contact_time`` [s] ending at each sample [m], (n,): the slide of a loaded stretch
+    that lasts at most ``contact_time`` (``foot_slide``'s chattering sole)."""
+    xy = np.asarray(xy, dtype=float)
+    t = np.asarray(t, dtype=float)
+    moved = np.zeros(t.size)
+    for k in range(1, t.size):  # lag in samples; the span t[i] - t[i-k] grows with k
+        within = t[k:] - t[:-k] <= contact_time * (1 + 1e-9)
+        if not within.any():
+            break
+        step = np.hypot(*(xy[k:] - xy[:-k]).T)
+        moved[k:] = np.where(within, np.maximum(moved[k:], step), moved[k:])
+    return moved
 
 
 def planned_slide(plan) -> float:
@@ -260,6 +305,7 @@ def predict(
     stiffness: float | None = None,
     force_limit: float = np.inf,
     floor_stiffness: float | None = None,
+    contact_time: float | None = None,
 ) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
 
@@ -274,12 +320,14 @@ def predict(
         force_limit: The servo's torque limit [N m], with ``walk``.
         floor_stiffness: Sole-corner stiffness of the simulator's soft floor [N/m]
             (``bench/sim/floor.py``); None: a rigid floor, no give.
+        contact_time: The floor contact's time constant τ [s] (``solref``), how long a
+            dragged sole stays loaded per stretch (``foot_slide``); None: a rigid floor.
 
     The swing sole's prop uses the planned clearance: where the servos' sag puts the
     reached walk's sole into the plane, that is ``strike``'s case, not a prop.
     """
     made = plan if walk is None else walk.plan
-    events = joint_limit_events(plan) + foot_slide_events(plan)
+    events = joint_limit_events(plan) + foot_slide_events(plan, contact_time)
     tips, rotation = tip_events(
         made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness
     )

@@ -394,8 +394,9 @@ def cause_class(r) -> str:
       ``simulated_max_tilt_deg``): the support rocked in MuJoCo as predicted, less far;
     * foot slide in the plan only: predicted ``foot_slide`` (the plan drags a loaded
       rear foot in double support past the slip distance: a large lean's
-      hip width × (1/cos λ − 1)), yet the robot walked: no loaded foot of MuJoCo's slid
-      that far (its slip detection measures it), the drift went elsewhere;
+      hip width × (1/cos λ − 1), faster than the soft floor's contacts let a hopping
+      sole stay loaded: ``planner.verdict.stretch_slide``), yet the robot walked: no
+      loaded foot of MuJoCo's slid that far (its slip detection measures it);
     * unexplained: none of these.
     """
     walks = _walks(r["predicted_verdict"])

@@ -17,7 +17,8 @@ The servo is the trial's actuator mode (``model.servo_settings``), and in a
 feedforward mode the loop is fed the same clipped torque as in the simulation
 (``playback.feedforward_torque``), so the prediction models the loop that is played.
 The floor is the scene's: its soft contact's corner stiffness (``floor.py``) gives
-the tipping predictor the floor's give.
+the tipping predictor the floor's give, and its time constant (``solref``) how long a
+dragged sole stays loaded (``foot_slide``).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from typing import TypedDict
 import mujoco
 import numpy as np
 
-from slopewalk.bench.sim.floor import scene_corner_stiffness
+from slopewalk.bench.sim.floor import SoftFloor, scene_corner_stiffness
 from slopewalk.bench.sim.model import scene_xml, servo_settings
 from slopewalk.bench.sim.playback import feedforward_stance_swing
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
@@ -93,6 +94,7 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         stiffness=servo.kp,
         force_limit=servo.force_limit,
         floor_stiffness=scene_corner_stiffness(scene),
+        contact_time=SoftFloor.of_scene(scene).timeconst,
     )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",

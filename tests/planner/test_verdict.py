@@ -14,10 +14,12 @@ from slopewalk.planner.tipping import excursion_integral
 from slopewalk.planner.verdict import (
     SLIP_DISTANCE,
     PredictedEvent,
+    foot_slide_events,
     planned_slide,
     predict,
     saturation_events,
     slip_events,
+    stretch_slide,
     verdict,
 )
 
@@ -50,6 +52,32 @@ def test_a_wide_robot_slides_its_rear_foot_past_the_slip_threshold(spec):
     assert planned_slide(plan) > SLIP_DISTANCE
     kinds = [e.kind for e in predict(plan, friction=1.0).events]
     assert "foot_slide" in kinds
+
+
+def test_a_stretch_slides_as_far_as_the_path_moves_within_the_contact_time():
+    """Hand-derived: a sole dragged at v for 0.3 s, sampled every 5 ms, loaded at most τ per
+    stretch: a stretch ending t after the drag starts slides v min(t, τ)."""
+    t = np.arange(61) * 0.005
+    v, tau = 0.04, 0.02  # 40 mm/s, 20 ms: 0.8 mm per stretch
+    xy = np.column_stack([np.zeros_like(t), v * t])
+    moved = stretch_slide(t, xy, tau)
+    assert moved == pytest.approx(v * np.minimum(t, tau), abs=1e-12)
+    assert stretch_slide(t, xy, 10.0).max() == pytest.approx(v * t[-1])  # the whole drag
+
+
+def test_a_wide_robots_drag_is_no_foot_slide_on_a_soft_floor_stretch(spec):
+    """The 8.3 mm drag of the wide robot (above) moves the foot < 5 mm in any 20 ms: on
+    MuJoCo's soft floor (contact time 20 ms) its chattering sole does not slide 5 mm loaded."""
+    wide = replace(spec, hip_width=0.37)
+    plan = plan_walk(wide, GaitParams.nominal(wide, 1.0, steps=2))
+    assert foot_slide_events(plan)  # rigid floor: loaded through the drag
+    assert foot_slide_events(plan, contact_time=0.02) == []
+    assert foot_slide_events(plan, contact_time=10.0)  # a stretch as long as the run
+    assert "foot_slide" not in [
+        e.kind for e in predict(plan, friction=1.0, contact_time=0.02).events
+    ]
+    with pytest.raises(SlopewalkError, match="contact_time 0.0 s must be > 0"):
+        foot_slide_events(plan, contact_time=0.0)
 
 
 def test_slip_needs_the_excess_friction_long_enough(plan):
