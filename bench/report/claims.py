@@ -672,8 +672,8 @@ def walk_agreement(rows) -> str:
     return (
         f"Predicted vs simulated strict walk: walked or not agree on {same} of {len(sure)} "
         f"trials; {'; '.join(parts)} (the plan predicts overload from its Newton–Euler "
-        "torques and shuffle from its swing clearance; off_footprint and pelvis_off only the "
-        "simulation can see)."
+        "torques plus the servo rotor's inertia × q̈, and shuffle from its swing clearance; "
+        "off_footprint and pelvis_off only the simulation can see)."
     )
 
 

@@ -1,9 +1,10 @@
 """The plan's strict walk prediction, on cases whose answer is worked out by hand.
 
-* overload: the planned torque against the stall torque. The nominal 1 s walk's largest
-  planned torque is a third of the AX-12A's 1.5 N m (``test_walk_check``: 0.45 N m, which
-  MuJoCo's inverse dynamics confirms in ``test_newton_euler_vs_mujoco``); a servo of
-  0.9 × that peak cannot give it, one of 1.1 × can.
+* overload: the planned servo torque (Newton–Euler + armature × q̈) against the stall
+  torque: a servo of 0.9 × its peak cannot give it, one of 1.1 × can; a rotor without
+  inertia leaves the Newton–Euler torque alone (MuJoCo's inverse dynamics confirms that
+  one in ``test_newton_euler_vs_mujoco``, the sum MuJoCo's actuator force in
+  ``test_walk_check``).
 * shuffle: a swing that never lifts (lift 0) is within TOUCH_HEIGHT of the plane the whole
   single support; the nominal swing (66.6 mm) leaves the 1 mm band within the window the
   floor's give explains.
@@ -22,13 +23,19 @@ from slopewalk.planner.walk_prediction import (
     planned_swing_touch,
     predict_walk,
     predicted_walk_verdict,
+    servo_torque,
 )
 
 
 @pytest.mark.parametrize("factor", [0.9, 1.1])
 def test_overload_is_predicted_where_the_planned_torque_passes_the_stall_torque(spec, factor):
     gait = GaitParams.nominal(spec, 1.0, steps=2)
-    peak = float(np.abs(plan_walk(spec, gait).tau).max())
+    plan = plan_walk(spec, gait)
+    peak = float(np.abs(servo_torque(plan)).max())
+    bare = replace(spec, armature=0.0)
+    assert predict_walk(plan_walk(bare, gait)).torque_ratio == pytest.approx(
+        np.abs(plan.tau).max() / spec.stall_torque
+    )
     weaker = replace(spec, stall_torque=factor * peak)
     prediction = predict_walk(plan_walk(weaker, gait))
     assert prediction.torque_ratio == pytest.approx(1 / factor)
