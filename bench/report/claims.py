@@ -655,26 +655,10 @@ def walk_confusion(rows) -> list[str]:
         if any(k[0] == b for k in counts):
             lines.append(f"| {b} | " + " | ".join(str(counts[(b, w)]) for w in seen) + " |")
     if "predicted_walk" in rows[0]:
+        from slopewalk.bench.report.fidelity import walk_agreement
+
         lines += ["", walk_agreement(rows)]
     return lines
-
-
-def walk_agreement(rows) -> str:
-    """One line: how often the plan's strict verdict (``predicted_walk``) says what the
-    simulation's (``walk``) says, and per check the trials each side names."""
-    sure = [r for r in rows if r["predicted_walk"] != "not_predicted"]
-    same = sum((r["predicted_walk"] == "walked") == (r["walk"] == "walked") for r in sure)
-    parts = []
-    for kind in ("overload", "shuffle"):
-        pred = {id(r) for r in sure if r["predicted_walk"] == kind}
-        sim = {id(r) for r in sure if r["walk"] == kind}
-        parts.append(f"{kind} predicted {len(pred)}, simulated {len(sim)}, both {len(pred & sim)}")
-    return (
-        f"Predicted vs simulated strict walk: walked or not agree on {same} of {len(sure)} "
-        f"trials; {'; '.join(parts)} (the plan predicts overload from its Newton–Euler "
-        "torques plus the servo rotor's inertia × q̈, and shuffle from its swing clearance; "
-        "off_footprint and pelvis_off only the simulation can see)."
-    )
 
 
 def _predicted_confusion(rows) -> list[str]:
