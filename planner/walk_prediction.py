@@ -21,7 +21,10 @@ here, used by ``walk_check``, so both sides judge by one number):
   meets the plane ~1 mm early (``bench/sim/floor.py``), so a sole planned within 1 mm of
   the plane is expected on it. ``TOUCH_ALLOWANCE`` is the time a swing may spend there:
   one ``TOUCH_WINDOW`` (the ~50 ms that 1 mm early touch-down takes, ``floor.py``) at each
-  end of the swing, lift-off and touch-down.
+  end of the swing, lift-off and touch-down. Where the actuators feed the floor's give
+  forward (the "_ff" modes turn the ankles against it and shorten the legs by the sink,
+  so the swing sole meets the plane at the planned touch-down) that band is gone: only a
+  sole planned on the plane (height ≤ 0) is expected on it.
 
 The plan puts every landing on its footprint and the pelvis at its end pose by
 construction; ``off_footprint`` and ``pelvis_off`` are the simulation's alone.
@@ -69,13 +72,15 @@ class WalkPrediction:
         ]
 
 
-def planned_swing_touch(plan) -> np.ndarray:
+def planned_swing_touch(plan, *, give_fed_forward: bool = False) -> np.ndarray:
     """Each step's planned time [s] with the swing sole within ``TOUCH_HEIGHT`` of the
-    plane during its single support, (steps,)."""
+    plane during its single support (on it, with ``give_fed_forward``: module doc),
+    (steps,)."""
     g = plan.params
     dsp = (1 - g.ssp_fraction) * g.step_time
     dt = float(np.median(np.diff(plan.t))) if plan.t.size > 1 else 0.0
-    low = plan.swing_sole[:, 2] < TOUCH_HEIGHT
+    height = plan.swing_sole[:, 2]
+    low = height <= 0.0 if give_fed_forward else height < TOUCH_HEIGHT
     out = np.zeros(g.steps)
     for k in range(g.steps):
         rows = (plan.t >= k * g.step_time + dsp) & (plan.t < (k + 1) * g.step_time)
@@ -89,11 +94,13 @@ def servo_torque(plan) -> np.ndarray:
     return plan.tau + plan.spec.armature * plan.qdd
 
 
-def predict_walk(plan) -> WalkPrediction:
-    """``WalkPrediction`` of a ``Plan``."""
+def predict_walk(plan, *, give_fed_forward: bool = False) -> WalkPrediction:
+    """``WalkPrediction`` of a ``Plan``; ``give_fed_forward``: played by actuators that feed
+    the floor's give forward (the "_ff" modes, module doc)."""
+    touch = planned_swing_touch(plan, give_fed_forward=give_fed_forward)
     return WalkPrediction(
         torque_ratio=float(np.abs(servo_torque(plan)).max() / plan.spec.stall_torque),
-        swing_touch=float(np.max(planned_swing_touch(plan), initial=0.0)),
+        swing_touch=float(np.max(touch, initial=0.0)),
     )
 
 

@@ -38,6 +38,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from slopewalk.bench.actuators import actuator_mode
 from slopewalk.bench.sim.closed_loop import play_controller
 from slopewalk.bench.sim.events import Event, detect, loaded_tilt, verdict
 from slopewalk.bench.sim.playback import Recording, on_rows, play
@@ -359,7 +360,7 @@ def compare(
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
-        **_walk_columns(plan, recording, verdict(events), predicted),
+        **_walk_columns(plan, trial, recording, verdict(events), predicted),
         series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing)
         | _settling_series(s, t, t < plan.t[0]),
     )
@@ -443,11 +444,14 @@ def _predicted_columns(predicted) -> dict:
     }
 
 
-def _walk_columns(plan: Plan, recording: Recording, balance: str, predicted) -> dict:
+def _walk_columns(
+    plan: Plan, trial: TrialSpec, recording: Recording, balance: str, predicted
+) -> dict:
     """``TrialResult``'s strict walk fields (``walk_check``), and the plan's prediction of
     them (``walk_prediction``) beside the predicted balance verdict, when predicted."""
     measures = measure_walk(plan, recording, rotation_slope_to_world(plan.params.slope))
-    walk = predict_walk(plan)
+    give_fed_forward = actuator_mode(trial.actuators).feedforward  # the "_ff" modes
+    walk = predict_walk(plan, give_fed_forward=give_fed_forward)
     return {
         "walk_verdict": walk_verdict(balance, measures),
         "landing_error": measures.landing_error,

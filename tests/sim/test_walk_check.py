@@ -180,3 +180,22 @@ def test_the_verdict_names_the_first_failed_check_after_the_balance():
     assert walk_verdict("stable", measures(pelvis_end_error=0.02)) == "pelvis_off"
     # the Bioloid's 60 mm foot: 5 mm at its toe is a turn of 1/6 rad (9.5 deg)
     assert heading_tolerance(0.06) == pytest.approx(1 / 6)
+
+
+@pytest.mark.parametrize("mode", ["stiff", "stiff_ff"])
+def test_the_floors_give_makes_a_low_swing_shuffle_unless_fed_forward(spec, mode):
+    """A 7.4 mm lift (the GA's typical one) at 1.5 s steps: played stiff, the stance sole's
+    give tilts the robot onto the swing foot (MuJoCo's contact list has it on the plane
+    longer than TOUCH_ALLOWANCE; the plan, counting its sole within TOUCH_HEIGHT, predicts
+    it); fed forward ("_ff", the give cancelled) the swing foot clears the plane."""
+    gait = GaitParams.nominal(spec, 1.5, steps=2, swing_lift=0.0074)
+    plan = plan_walk(spec, gait)
+    result = run_trial(spec, TrialSpec(gait, actuators=mode), plan=plan)
+    assert result.simulated_verdict == "stable"
+    fed = mode.endswith("_ff")
+    if not fed:  # the independent loop plays the stiff mode's commands (no feedforward)
+        t, _, pushed = _stepped(plan)
+        assert result.swing_touch == pytest.approx(_swing_touch(plan, t, pushed), abs=2 * DT)
+    assert (result.swing_touch > TOUCH_ALLOWANCE) == (not fed)
+    assert result.walk_verdict == ("walked" if fed else "shuffle")
+    assert result.predicted_walk_verdict == result.walk_verdict
