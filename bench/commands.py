@@ -53,6 +53,12 @@ def plan(args: argparse.Namespace) -> None:
     from slopewalk.planner.plan import plan_checked
     from slopewalk.planner.spec import load_spec
     from slopewalk.planner.verdict import predict
+    from slopewalk.planner.walk_prediction import (
+        TOUCH_ALLOWANCE,
+        TOUCH_HEIGHT,
+        predict_walk,
+        predicted_walk_verdict,
+    )
 
     check_output(args.out)
     _named_npz(args.out, "--out")
@@ -80,6 +86,13 @@ def plan(args: argparse.Namespace) -> None:
     )
     for event in predicted.events[:8]:
         print(f"  {event.time:7.3f} s  {event.kind:<12} {event.cause}")
+    walk = predict_walk(plan)
+    print(
+        f"predicted walk: {predicted_walk_verdict(predicted.verdict, walk)}  (servo torque "
+        f"peak {walk.torque_ratio:.2f} x stall, Newton-Euler + rotor; swing sole within "
+        f"{TOUCH_HEIGHT * 1e3:g} mm of the plane up to {walk.swing_touch:.3f} s of a single "
+        f"support, allowance {TOUCH_ALLOWANCE:g} s; docs/verdicts.md)"
+    )
     print(
         f"work: {summary['work_J']:.4f} J   max friction ratio: "
         f"{summary['max_friction_ratio']:.3f}   max |ZMP - LIPM|: "

@@ -3,9 +3,9 @@
 ``compare_controllers`` plays every trial of a sweep (default: the paper's) open
 loop (one ``mujoco.rollout``) and with each controller (``slopewalk.bench.sim.env``), on
 local spawned worker processes (``map_local``), and ``report`` writes the markdown table of
-``results/controllers.md``: per controller, how many trials walk (simulated
-verdict ``stable``), which ones it gains and loses against open loop, and the
-verdict of every trial.
+``results/controllers.md``: per controller, how many trials walk (strict walk
+verdict ``walked``, ``bench/sim/walk_check.py``), which ones it gains and loses against
+open loop, and the verdict of every trial.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ def play(job) -> dict:
     lost = [e for e in result.events if e.kind != "torque_limit"]
     return {
         "verdict": result.simulated_verdict,
+        "walk": result.walk_verdict,
         "first": f"{lost[0].kind} {lost[0].time:.2f} s" if lost else "",
         "zmp_rms_mm": result.zmp_rms * 1e3,
     }
@@ -62,14 +63,17 @@ def report(table: dict, *, source: str, command: str) -> str:
     """The markdown comparison (module doc)."""
     labels = table["trials"]
     names = [k for k in table if k != "trials"]
-    base = [r["verdict"] == "stable" for r in table[OPEN_LOOP]]
+    base = [r["walk"] == "walked" for r in table[OPEN_LOOP]]
     lines = [
         "# Open loop vs closed-loop controllers",
         "",
         f"Trials of `{source}` ({len(labels)}), each played open loop (the plan's joint "
         "angles through one `mujoco.rollout`) and with each controller "
         "(`bench/controllers/`, stepped through the `dm_env` environment `bench/sim/env.py`). "
-        "A trial *walks* when its simulated verdict is `stable` (no slip, tip or fall).",
+        "A trial *walks* when its strict walk verdict is `walked`: no slip, tip or fall, "
+        "and it walked the plan (each landing on its footprint, the swing foot off the plane, "
+        "the pelvis at the end pose, every actuator within the servo's stall torque; "
+        "`docs/verdicts.md`).",
         "",
         f"Regenerate with `{command}`.",
         "",
@@ -78,7 +82,7 @@ def report(table: dict, *, source: str, command: str) -> str:
     ]
     for name in names:
         rows = table[name]
-        walks = [r["verdict"] == "stable" for r in rows]
+        walks = [r["walk"] == "walked" for r in rows]
         gained = [labels[i] for i, (w, b) in enumerate(zip(walks, base, strict=True)) if w > b]
         lost = [labels[i] for i, (w, b) in enumerate(zip(walks, base, strict=True)) if w < b]
         lines.append(
@@ -91,11 +95,13 @@ def report(table: dict, *, source: str, command: str) -> str:
         for name in names:
             r = table[name][i]
             first = f" ({r['first']})" if r["first"] else ""
-            cells.append(f"{r['verdict']}{first}")
+            walk = f" / {r['walk']}" if r["walk"] not in ("walked", r["verdict"]) else ""
+            cells.append(f"{r['verdict']}{walk}{first}")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     lines += [
         "",
-        "Cells: simulated verdict (first slip/tip/fall and its time after the walk starts). "
+        "Cells: balance verdict, / the strict walk verdict where the robot kept its balance "
+        "but did not walk the plan (first slip/tip/fall and its time after the walk starts). "
         "Speed: `slopewalk benchmark controller` (closed-loop vs rollout steps/s).",
     ]
     return "\n".join(lines) + "\n"

@@ -120,6 +120,30 @@ SLOPE_CLAIM = (
 )
 
 
+def _walked(row) -> bool:
+    """Whether a sweep row's robot walked the plan: the strict verdict (``walk``) where the
+    table has it, else (a table written before it) the balance verdict ``stable``."""
+    return row.get("walk", "walked" if row["simulated_verdict"] == "stable" else "") == "walked"
+
+
+def _strict(line: list[dict], walked: list, what: str, unit: str) -> str:
+    """The claims' "walks": the strict verdict's cases, and what stopped the others that
+    kept their balance (``walk`` column), e.g. "walked the plan at 2 s (strict; 1 s
+    overload)"."""
+    if "walk" not in line[0]:
+        return "strict walk verdict not in this table"
+    key = "step_time" if what == "t_c" else "slope_deg"
+    failed = [
+        f"{r[key]:g}{unit} {r['walk']}"
+        for r in line
+        if r["simulated_verdict"] == "stable" and r["walk"] != "walked"
+    ]
+    return (
+        f"walked the plan (strict verdict) at {what} = {_fmt_list(walked)}{unit * bool(walked)}"
+        + (f" ({', '.join(failed)})" if failed else "")
+    )
+
+
 def step_time_claim(rows, spec: RobotSpec) -> dict:
     flat = _line(rows, slope_deg=0.0, friction=1.0)
     if missing := _missing(flat, "step_time", STEP_TIME_CASES):
@@ -130,6 +154,7 @@ def step_time_claim(rows, spec: RobotSpec) -> dict:
         )
     ok_a = [r["step_time"] for r in flat if r["analytic_verdict"] == "stable"]
     ok_s = [r["step_time"] for r in flat if r["simulated_verdict"] == "stable"]
+    ok_w = [r["step_time"] for r in flat if _walked(r)]
     by_t = {r["step_time"]: r for r in flat}
     plans = [(f"{t:g} s", _nominal(spec, t, 0.0, [by_t[t]])) for t in STEP_TIME_CASES]
     sagittal = {t: ax.axis_minima(p)[1] for t, (_, p) in zip(STEP_TIME_CASES, plans, strict=True)}
@@ -140,10 +165,10 @@ def step_time_claim(rows, spec: RobotSpec) -> dict:
         else ""
     )
 
-    def agrees(key):
+    def agrees(key, walks="stable"):
         return (
-            by_t.get(0.5, {}).get(key) == "stable"
-            and by_t.get(0.4, {}).get(key, "stable") != "stable"
+            by_t.get(0.5, {}).get(key, walks) == walks
+            and by_t.get(0.4, {}).get(key, walks) != walks
         )
 
     return _claim(
@@ -151,8 +176,12 @@ def step_time_claim(rows, spec: RobotSpec) -> dict:
         f"ZMP inside the polygon at t_c = {_fmt_list(ok_a)} s; min margin at 0.5 s "
         f"{by_t.get(0.5, {}).get('analytic_min_margin_mm', float('nan')):.1f} mm"
         f"{decides}",
-        f"no tip/slip/fall at t_c = {_fmt_list(ok_s)} s (μ = 1)",
-        _yes(agrees("analytic_verdict"), agrees("simulated_verdict"))
+        f"no tip/slip/fall at t_c = {_fmt_list(ok_s)} s; {_strict(flat, ok_w, 't_c', ' s')} "
+        "(μ = 1)",
+        _yes(
+            agrees("analytic_verdict"),
+            agrees("walk", "walked") if "walk" in flat[0] else agrees("simulated_verdict"),
+        )
         + f"; front to back: {'yes' if front else 'no'} (sagittal inside at 0.5 s, "
         "outside at 0.4 s)",
         "stability_map.png, sweep.csv (slope 0)",
@@ -173,6 +202,7 @@ def slope_claim(rows, spec: RobotSpec) -> dict:
         )
     inside = [r["slope_deg"] for r in line if r["analytic_verdict"] == "stable"]
     stable = [r["slope_deg"] for r in line if r["simulated_verdict"] == "stable"]
+    walked = [r["slope_deg"] for r in line if _walked(r)] if "walk" in line[0] else stable
     rear, plans = [], []
     by_slope = {r["slope_deg"]: r for r in line}
     for slope in (0.0, 15.0, 18.0, 22.5):
@@ -194,8 +224,8 @@ def slope_claim(rows, spec: RobotSpec) -> dict:
         *SLOPE_CLAIM,
         f"inside at {_fmt_list(inside)}°; min margin at 18°: {margins[18.0]:.1f} mm, at 22.5°: "
         f"{margins[22.5]:.1f} mm; mean SSP ZMP x from the ankle [mm]: {'; '.join(rear)}",
-        f"stable at {_fmt_list(stable)}° (μ = 1)",
-        f"analytic {word(inside)}, simulated {word(stable)}",
+        f"stable at {_fmt_list(stable)}°; {_strict(line, walked, 'slopes', '°')} (μ = 1)",
+        f"analytic {word(inside)}, simulated {word(walked)}",
         "stability_map.png, zmp_traces.png, sweep.csv (t_c = 1 s)",
         ax.labelled_axes(plans[1:]),
         f"sagittal: {ax.PHYSICS} (gravity along the plane moves the ZMP back by c_z tan θs) "
@@ -595,7 +625,40 @@ def confusion(rows) -> str:
         )
     if rows and "predicted_verdict" in rows[0]:
         lines += _predicted_confusion(rows)
+    if rows and "walk" in rows[0]:
+        lines += walk_confusion(rows)
     return "\n".join(lines) + "\n"
+
+
+def walk_confusion(rows) -> list[str]:
+    """The strict walk verdict (``walk``, ``bench/sim/walk_check.py``) beside the balance
+    verdict, and the plan's prediction of it (``predicted_walk``) against it."""
+    from slopewalk.bench.sim.walk_check import WALK_VERDICTS
+
+    walks = [*WALK_VERDICTS, *(v for v in SIM_VERDICTS[1:] if v != "error")]
+    seen = [w for w in walks if any(r["walk"] == w for r in rows)]
+    counts = Counter((r["simulated_verdict"], r["walk"]) for r in rows)
+    lines = [
+        "",
+        "# Balance vs strict walk verdicts",
+        "",
+        "`walked`: the robot kept its balance and walked the plan: each landing within 5 mm "
+        "of its planned footprint and turned less than moves its toe 5 mm, the swing foot "
+        "on the plane at most 0.1 s of each single support, the pelvis at the planned end "
+        "pose, every actuator under 0.99 of the spec's servo stall torque "
+        "(`docs/verdicts.md`).",
+        "",
+        "| balance \\ walk | " + " | ".join(seen) + " |",
+        "|---|" + "---|" * len(seen),
+    ]
+    for b in SIM_VERDICTS:
+        if any(k[0] == b for k in counts):
+            lines.append(f"| {b} | " + " | ".join(str(counts[(b, w)]) for w in seen) + " |")
+    if "predicted_walk" in rows[0]:
+        from slopewalk.bench.report.fidelity import walk_agreement
+
+        lines += ["", walk_agreement(rows)]
+    return lines
 
 
 def _predicted_confusion(rows) -> list[str]:
@@ -688,6 +751,13 @@ def write_report(
 
 
 AXES_NOTE = (
+    "*Simulated*: *stable* / *tip* / *slip* / *fall* is the balance verdict (the robot stayed "
+    "up); *walked* is the strict walk verdict of the sweep's rows (`walk` column, "
+    "`docs/verdicts.md`): balanced, every landing on its planned footprint, the swing foot off "
+    "the plane, the pelvis at the planned end pose and every actuator within the spec's servo "
+    "stall torque; the sweep's rows bear a claim out only where the robot walked "
+    "(the envelope's rows are judged by their balance verdict until the envelope is "
+    "regenerated with its walk columns). "
     "*Smallest margin by axis*: over the walk, the signed distance along y_S (lateral) or "
     "x_S (sagittal) alone from the ZMP to the support polygon's boundary at the ZMP's other "
     "coordinate (`planner.zmp.axis_margins`), positive inside. *Rests on*: physics (any "

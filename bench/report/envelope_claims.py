@@ -4,7 +4,9 @@ The sweep's claims are about one hand-picked gait; the paper's question is
 whether *a* gait with the ZMP inside exists at a step time and slope. The
 envelope (``envelope.csv``, rows as ``tables.table.read_table`` reads them)
 answers it per cell: ``feasible`` (the GA's max-margin gait has its ZMP inside,
-joints within limits) and whether MuJoCo walks that gait (per actuator mode).
+joints within limits) and whether MuJoCo walks that gait (per actuator mode): its strict
+walk verdict (``walk`` columns, ``bench/sim/walk_check.py``) is ``walked``; a table
+written before those columns is read by its balance verdict (``stable``).
 Numbers at fixed precision, as in ``claims.py``.
 """
 
@@ -14,7 +16,7 @@ from pathlib import Path
 
 from slopewalk.bench.files import atomic_path
 from slopewalk.bench.sim.model import ACTUATOR_MODES
-from slopewalk.bench.tables.envelope import is_failure
+from slopewalk.bench.tables.envelope import is_failure, walk_column, walks
 from slopewalk.bench.tables.table import read_table
 
 NOMINAL_STEP_TIME = 1.0  # [s]
@@ -34,7 +36,9 @@ def _modes(rows) -> list[str]:
 
 
 def _walks(row, mode) -> bool:
-    return row.get(f"maxmargin_{mode}_verdict") == "stable"
+    """The max-margin gait walks in ``mode``: strict walk verdict ``walked`` (balance
+    ``stable`` in a table written before the walk columns, ``tables.envelope.walks``)."""
+    return bool(walks(row, "maxmargin", mode))
 
 
 def _word(value) -> str:
@@ -42,7 +46,14 @@ def _word(value) -> str:
 
 
 def _sim_text(row, modes) -> str:
-    return ", ".join(f"{m} {row.get(f'maxmargin_{m}_verdict') or 'not played'}" for m in modes)
+    """Each mode's balance verdict, and its strict walk verdict where it differs."""
+
+    def one(m):
+        balance = row.get(f"maxmargin_{m}_verdict") or "not played"
+        strict = row.get(walk_column("maxmargin", m))
+        return f"{m} {balance}" + (f" ({strict})" if strict and strict != balance else "")
+
+    return ", ".join(one(m) for m in modes)
 
 
 def _cell(row) -> str:
@@ -348,7 +359,11 @@ def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> s
         f"Written by `slopewalk envelope` with the table ({source}): per family, μ = 1, the "
         "default robot. *Inside*: the GA's max-margin gait has its ZMP inside the support "
         "polygon at every instant with every joint within its limits; *walked*: MuJoCo plays "
-        "that gait to the end with the verdict `stable`, per actuator mode. The slopes are "
+        "that gait to the end and walks the plan (strict walk verdict `walked`: balanced, "
+        "every landing on its footprint, the swing foot off the plane, the pelvis at the end "
+        "pose, every actuator within the servo's stall torque; `docs/verdicts.md`; a table "
+        "written before the walk columns: the balance verdict `stable`), per actuator mode. "
+        "The slopes are "
         f"those at t_c = {NOMINAL_STEP_TIME:g} s (negative: downhill).",
         "",
         "| family | flat: fastest t_c inside | flat: fastest t_c walked | "

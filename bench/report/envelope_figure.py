@@ -8,7 +8,8 @@ Per friction and robot, one row of panels:
   every family's feasibility boundary (margin = 0; solid black for the paper's family,
   dashed for the others) and the required-margin contour of the first family (dotted).
 - **Does MuJoCo walk that gait?** One small panel per actuator mode: the cells where the
-  first family's max-margin gait walks (verdict ``stable``) filled in the mode's colour,
+  first family's max-margin gait walks (strict walk verdict ``walked``; balance ``stable`` in a
+  table written before it) filled in the mode's colour,
   those where it does not in light grey, cells not played white; the first family's
   feasibility outline on top (black), so a walk outside the analytic boundary shows at a
   glance, and every other family's walked cells as a dashed outline in the mode's colour.
@@ -38,7 +39,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from slopewalk.bench.files import atomic_path  # noqa: E402
 from slopewalk.bench.sim.model import ACTUATOR_MODES  # noqa: E402
-from slopewalk.bench.tables.envelope import is_failure  # noqa: E402
+from slopewalk.bench.tables.envelope import is_failure, walks  # noqa: E402
 from slopewalk.bench.tables.table import read_table  # noqa: E402
 
 CLIP_MM = 10.0
@@ -78,9 +79,9 @@ def grids(rows: list[dict], family: str) -> tuple[list, list, dict]:
         out["feasible"][i, j] = r["feasible"] == "True"
         out["found"][i, j] = r["minwork_found"] == "True"
         for m in modes:
-            verdict = r.get(f"maxmargin_{m}_verdict")
-            if verdict:
-                out[f"walks_{m}"][i, j] = verdict == "stable"
+            walked = walks(r, "maxmargin", m)  # the strict walk verdict (balance in old tables)
+            if walked is not None:
+                out[f"walks_{m}"][i, j] = walked
     return times, slopes, out
 
 

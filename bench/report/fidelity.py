@@ -4,7 +4,10 @@
 into markdown: per table, the agreement of the paper's verdict (planned ZMP
 inside the polygon), the compliance-aware verdict and the predicted verdict
 (the most severe predicted event) with the simulated one, counting "walks"
-(``stable``) against "does not"; both confusion tables; each disagreement of
+(``stable``) against "does not" (the balance comparison: the strict walk verdict of
+``bench/sim/walk_check.py`` is not what these count), both confusion tables, and, for a
+table with the strict walk columns, one line of how often the plan's predicted walk
+verdict (``predicted_walk``) says what the simulated one (``walk``) says; each disagreement of
 the predicted verdict with the measured quantities that explain it; and the
 issue's goals where the table holds their cells (flat 2 s stiff CoP RMS,
 ``servo_ff`` on every cell with ≥ 5 mm planned margin within the joint limits); for
@@ -223,6 +226,8 @@ def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> li
     lines += confusion_table(rows, "analytic_verdict", PAPER_VERDICTS)
     lines += ["", "### Predicted verdict × simulated", ""]
     lines += confusion_table(rows, "predicted_verdict", ("stable", *VERDICT_KINDS))
+    if rows and "predicted_walk" in rows[0]:  # a table with the strict walk columns
+        lines += ["", walk_agreement(rows)]
     if not any(r.get("gait", "nominal") != "nominal" for r in rows):
         lines += _goals(rows)  # the issue-11 goals are the nominal gait's
     wrong = [r for r in rows if _walks(r["predicted_verdict"]) != _walks(r["simulated_verdict"])]
@@ -248,6 +253,24 @@ def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> li
     ] or ["none"]
     lines += replica_section(rows, _label)
     return lines + [""]
+
+
+def walk_agreement(rows) -> str:
+    """One line: how often the plan's strict verdict (``predicted_walk``) says what the
+    simulation's (``walk``) says, and per check the trials each side names."""
+    sure = [r for r in rows if r["predicted_walk"] != "not_predicted"]
+    same = sum((r["predicted_walk"] == "walked") == (r["walk"] == "walked") for r in sure)
+    parts = []
+    for kind in ("overload", "shuffle"):
+        pred = {id(r) for r in sure if r["predicted_walk"] == kind}
+        sim = {id(r) for r in sure if r["walk"] == kind}
+        parts.append(f"{kind} predicted {len(pred)}, simulated {len(sim)}, both {len(pred & sim)}")
+    return (
+        f"Predicted vs simulated strict walk: walked or not agree on {same} of {len(sure)} "
+        f"trials; {'; '.join(parts)} (the plan predicts overload from its Newton–Euler "
+        "torques plus the servo rotor's inertia × q̈, and shuffle from its swing clearance; "
+        "off_footprint and pelvis_off only the simulation can see)."
+    )
 
 
 def _by_mode(rows, modes) -> list[str]:

@@ -206,7 +206,11 @@ class ModelScene:
                 intprm=[_FOUND, _NETFORCE, 1],
             )  # fmt: skip
         for p in SIDE_PREFIX:
-            for name, kind in (("sole_pos", "FRAMEPOS"), ("foot_zaxis", "FRAMEZAXIS")):
+            for name, kind in (
+                ("sole_pos", "FRAMEPOS"),
+                ("foot_zaxis", "FRAMEZAXIS"),
+                ("foot_xaxis", "FRAMEXAXIS"),  # the heading (walk_check), rigid with the foot
+            ):
                 mjs.add_sensor(
                     name=f"{p}{name}", type=getattr(_SENSOR, f"mjSENS_{kind}"),
                     objtype=_OBJ.mjOBJ_SITE, objname=f"{p}sole",

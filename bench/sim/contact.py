@@ -8,7 +8,7 @@ vectorised afterwards (``decode``). Sensors (``add_trial_sensors``):
   contacts, each with its force in the contact frame (normal first) and its
   point; and a second one reducing them to the net force (world frame);
 * per non-foot body, whether it touches the floor (for ``fall``);
-* sole sites and pelvis positions, the feet's z axes, the 8 joint angles and
+* sole sites and pelvis positions, the feet's z and x axes, the 8 joint angles and
   the 8 actuator torques.
 
 MuJoCo facts this relies on (each checked in ``tests/test_contact.py`` against
@@ -93,6 +93,12 @@ def add_trial_sensors(mjs: mujoco.MjSpec, floor: str = "floor") -> None:
             objtype=_OBJ.mjOBJ_XBODY,
             objname=f"{p}foot",
         )
+        mjs.add_sensor(
+            name=f"{p}foot_xaxis",
+            type=_SENSOR.mjSENS_FRAMEXAXIS,
+            objtype=_OBJ.mjOBJ_XBODY,
+            objname=f"{p}foot",
+        )
     mjs.add_sensor(
         name="pelvis_pos", type=_SENSOR.mjSENS_FRAMEPOS, objtype=_OBJ.mjOBJ_XBODY, objname="pelvis"
     )
@@ -129,6 +135,7 @@ class TrialSensors:
         cop: CoP of both feet together [m], (m, 2), NaN when neither is loaded.
         sole: Sole sites [m], (m, 2, 3).
         foot_normal: Each foot's z axis, (m, 2, 3); (0, 0, 1) when flat on the plane.
+        foot_axis_x: Each foot's x axis, (m, 2, 3): its heading in the plane (``walk_check``).
         pelvis_height: Pelvis origin above the plane [m], (m,).
         pelvis_qpos: Pelvis free-joint pose in the world (position, quaternion wxyz), (m, 7);
             with ``q`` it is the full ``qpos`` for replaying the motion (recordings).
@@ -142,6 +149,7 @@ class TrialSensors:
     cop: np.ndarray
     sole: np.ndarray
     foot_normal: np.ndarray
+    foot_axis_x: np.ndarray
     pelvis_height: np.ndarray
     pelvis_qpos: np.ndarray
     touching: np.ndarray
@@ -183,6 +191,7 @@ def decode(model: mujoco.MjModel, sensordata: np.ndarray, rotation_slope_to_worl
         cop=cop,
         sole=np.stack([block(f"{p}sole_pos") for p in SIDE_PREFIX], axis=1) @ R,
         foot_normal=np.stack([block(f"{p}foot_zaxis") for p in SIDE_PREFIX], axis=1) @ R,
+        foot_axis_x=np.stack([block(f"{p}foot_xaxis") for p in SIDE_PREFIX], axis=1) @ R,
         pelvis_height=block("pelvis_pos") @ R[:, 2],
         pelvis_qpos=np.column_stack([block("pelvis_pos"), block("pelvis_quat")]),
         touching=np.asarray(

@@ -37,8 +37,10 @@ from slopewalk.planner.joints import MJCF_JOINTS
 # (planner/verdict.py), their basis stated above.
 from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
 
+# SATURATION: one definition with the strict walk's overload (planner/walk_prediction.py).
+from slopewalk.planner.walk_prediction import SATURATION
+
 FALL_HEIGHT_FRACTION = 0.6  # of the planned hip height
-SATURATION = 0.99  # of the actuator's torque limit
 VERDICTS = ("stable", "slip", "tip", "fall", "diverged")  # least severe first
 _SEVERITY = {kind: i for i, kind in enumerate(VERDICTS) if i}
 LOST = ("tip", "fall", "diverged")  # the robot did not walk on: no CoP compared after

@@ -38,14 +38,17 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from slopewalk.bench.actuators import actuator_mode
 from slopewalk.bench.sim.closed_loop import play_controller
 from slopewalk.bench.sim.events import Event, detect, loaded_tilt, verdict
 from slopewalk.bench.sim.playback import Recording, on_rows, play
 from slopewalk.bench.sim.prediction import predict_trial
 from slopewalk.bench.sim.support import support_difference
 from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.bench.sim.walk_check import measure as measure_walk
+from slopewalk.bench.sim.walk_check import walk_verdict
 from slopewalk.planner.joints import stance_swing_to_left_right
-from slopewalk.planner.kinematics import GRAVITY
+from slopewalk.planner.kinematics import GRAVITY, rotation_slope_to_world
 from slopewalk.planner.plan import (
     LARGE_WALK_SAMPLES,
     Plan,
@@ -56,6 +59,7 @@ from slopewalk.planner.plan import (
 )
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.verdict import TIP_ANGLE
+from slopewalk.planner.walk_prediction import predict_walk, predicted_walk_verdict
 from slopewalk.planner.zmp import signed_margin
 
 
@@ -91,6 +95,17 @@ class TrialResult:
     unplanned_contact_s: float = 0.0  # [s] foot-time touching where the plan has it lifted
     missed_contact_s: float = 0.0  # [s] foot-time lifted where the plan has it down
     simulated_max_tilt: float = 0.0  # [rad] largest tilt of a loaded foot off the plane, walk
+    # the strict walk verdict (walk_check.py) and its measures
+    walk_verdict: str = "walked"  # walked, overload, off_footprint, shuffle, pelvis_off, or
+    # the balance verdict when not stable
+    landing_error: float = float("nan")  # [m] largest landing distance off its footprint
+    landing_heading_error: float = float("nan")  # [rad] largest landing heading error
+    swing_touch: float = float("nan")  # [s] longest swing-foot touch in one single support
+    pelvis_end_error: float = float("nan")  # [m] pelvis at the end vs the plan's end pose
+    torque_ratio: float = float("nan")  # largest |actuator torque| / spec stall torque, walk
+    predicted_walk_verdict: str = "walked"  # walk_prediction.py: overload / shuffle from plan
+    predicted_torque_ratio: float = float("nan")  # largest planned |τ| / spec stall torque
+    predicted_swing_touch: float = float("nan")  # [s] planned swing sole within touch height
 
     def scalars(self) -> dict:
         """Everything but the series, strict JSON (angles in degrees at this edge).
@@ -179,6 +194,13 @@ class TrialResult:
             f"friction ratio {_num(self.simulated_max_friction_ratio, '.3f')}, loaded foot "
             f"tilted up to {_num(np.rad2deg(self.simulated_max_tilt), '.2f')} deg (tip angle "
             f"{np.rad2deg(TIP_ANGLE):g} deg)",
+            f"walk:      {self.walk_verdict:<12} landing off its footprint up to "
+            f"{_mm(self.landing_error)} mm / {_num(np.rad2deg(self.landing_heading_error), '.2f')}"
+            f" deg, swing foot on the plane up to {_num(self.swing_touch, '.3f')} s of a single "
+            f"support, pelvis {_mm(self.pelvis_end_error)} mm off the end pose, peak torque "
+            f"{_num(self.torque_ratio, '.2f')} x stall (predicted {self.predicted_walk_verdict}: "
+            f"{_num(self.predicted_torque_ratio, '.2f')} x stall, planned swing sole on the "
+            f"plane {_num(self.predicted_swing_touch, '.3f')} s)",
             f"ZMP analytic vs simulated: RMS {_mm(self.zmp_rms)} mm, max "
             f"{_mm(self.zmp_max)} mm over {self.standing_fraction:.0%} of the walk",
             f"unplanned support {self.unplanned_support_s:.3f} s (foot-time touching while "
@@ -338,6 +360,7 @@ def compare(
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
+        **_walk_columns(plan, trial, recording, verdict(events), predicted),
         series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing)
         | _settling_series(s, t, t < plan.t[0]),
     )
@@ -418,6 +441,29 @@ def _predicted_columns(predicted) -> dict:
         "predicted_verdict": predicted.verdict,
         "predicted_events": predicted.prediction.events,
         "predicted_rotation": float(np.max(predicted.prediction.rotation, initial=0.0)),
+    }
+
+
+def _walk_columns(
+    plan: Plan, trial: TrialSpec, recording: Recording, balance: str, predicted
+) -> dict:
+    """``TrialResult``'s strict walk fields (``walk_check``), and the plan's prediction of
+    them (``walk_prediction``) beside the predicted balance verdict, when predicted."""
+    measures = measure_walk(plan, recording, rotation_slope_to_world(plan.params.slope))
+    give_fed_forward = actuator_mode(trial.actuators).feedforward  # the "_ff" modes
+    walk = predict_walk(plan, give_fed_forward=give_fed_forward)
+    return {
+        "walk_verdict": walk_verdict(balance, measures),
+        "landing_error": measures.landing_error,
+        "landing_heading_error": measures.landing_heading_error,
+        "swing_touch": measures.swing_touch,
+        "pelvis_end_error": measures.pelvis_end_error,
+        "torque_ratio": measures.torque_ratio,
+        "predicted_walk_verdict": predicted_walk_verdict(predicted.verdict, walk)
+        if predicted
+        else NOT_PREDICTED,
+        "predicted_torque_ratio": walk.torque_ratio,
+        "predicted_swing_touch": walk.swing_touch,
     }
 
 

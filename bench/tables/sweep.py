@@ -20,8 +20,8 @@ and its plan), its unit scale and its decimals; ``COLUMNS``, ``DECIMALS`` and
 ``TableFormat``s (without, with a controller column, with a command-noise column, with
 the gait's columns of a sweep of drawn or given gaits); the module-level
 functions below are their methods. A finished table of an older version
-(``PREVIOUS_LAYOUTS``: its columns had a ``wall_s``, or lacked the fidelity columns or
-the simulated tilt) is replaced by a fresh run (``--resume`` refuses it).
+(``PREVIOUS_LAYOUTS``: its columns had a ``wall_s``, or lacked the fidelity columns, the
+simulated tilt or the strict walk columns) is replaced by a fresh run (``--resume`` refuses it).
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from slopewalk.bench.sim.events import VERDICTS
+from slopewalk.bench.sim.walk_check import WALK_VERDICTS
 from slopewalk.bench.tables.table import TableFormat
 from slopewalk.bench.tables.table import text as _text
 from slopewalk.planner.verdict import PAPER_VERDICTS
@@ -124,6 +125,17 @@ SPEC = (
     Column("predicted_rotation_deg", "predicted_rotation", DEG, 5),  # of the support, largest
     Column("simulated_max_tilt_deg", "simulated_max_tilt", DEG, 5),  # of a loaded foot, largest
     Column("unplanned_support_s", "unplanned_support_s", decimals=4),  # foot-time off the plan
+    # the strict walk verdict (bench/sim/walk_check.py) and its measures, then the plan's
+    # prediction of it (planner/walk_prediction.py)
+    Column("walk", "walk_verdict"),  # WALK_VERDICTS, or the balance verdict when not stable
+    Column("landing_error_mm", "landing_error", MM, 4),  # largest, off the planned footprint
+    Column("landing_heading_error_deg", "landing_heading_error", DEG, 5),  # largest
+    Column("swing_touch_s", "swing_touch", decimals=4),  # longest in one single support
+    Column("pelvis_end_error_mm", "pelvis_end_error", MM, 4),  # vs the plan's end pose
+    Column("torque_ratio", "torque_ratio", decimals=6),  # peak |actuator torque| / stall
+    Column("predicted_walk", "predicted_walk_verdict"),  # overload / shuffle from the plan
+    Column("predicted_torque_ratio", "predicted_torque_ratio", decimals=6),  # planned |τ|
+    Column("predicted_swing_touch_s", "predicted_swing_touch", decimals=4),
     # the one-line message of a trial that raised or killed its worker, else empty
     Column("error", lambda _r, _p: ""),
 )
@@ -132,6 +144,8 @@ OUTCOMES = tuple(c for c in SPEC if c.source is not None)
 # a trial that raised has the verdicts "error"
 ANALYTIC_VERDICTS = (*PAPER_VERDICTS, "error")
 SIMULATED_VERDICTS = (*VERDICTS, "error")
+# the strict walk verdict: walked, a failed check, or the balance verdict when not stable
+WALK_COLUMN_VERDICTS = (*WALK_VERDICTS, *SIMULATED_VERDICTS[1:])
 DECIMALS = {c.name: c.decimals for c in SPEC if c.decimals is not None}  # (module doc)
 HEADER = (",".join(COLUMNS) + "\n").encode()
 # A sweep that names a controller somewhere: one more input, last, so every other
@@ -151,7 +165,9 @@ _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the 
 # before fixed precision: a wall time, and no fidelity columns
 PREVIOUS_COLUMNS = (*COLUMNS[:_FIDELITY], "wall_s", "error")
 PREVIOUS_HEADER = (",".join(PREVIOUS_COLUMNS) + "\n").encode()
-_BEFORE_TILT = tuple(c for c in COLUMNS if c != "simulated_max_tilt_deg")  # before 2026-12
+_STRICT = COLUMNS.index("walk")  # the columns before it are the older versions'
+_BEFORE_WALK = (*COLUMNS[:_STRICT], "error")  # before the strict walk verdict (issue 21)
+_BEFORE_TILT = tuple(c for c in _BEFORE_WALK if c != "simulated_max_tilt_deg")  # before 2026-12
 # every finished layout an older slopewalk wrote, which a fresh run may replace:
 # the one with a wall time, then fixed precision without the fidelity columns
 # (with and without the controller column)
@@ -161,10 +177,18 @@ PREVIOUS_LAYOUTS = (
     (*COLUMNS[:_FIDELITY], "error", "controller"),
     _BEFORE_TILT,
     (*_BEFORE_TILT, "controller"),
+    _BEFORE_WALK,
+    (*_BEFORE_WALK, "controller"),
+    (*_BEFORE_WALK, "command_noise_deg"),
+    (*_BEFORE_WALK, *GAIT_COLUMNS),
 )
 
 
-_SWEEP_VERDICTS = {"analytic_verdict": ANALYTIC_VERDICTS, "simulated_verdict": SIMULATED_VERDICTS}
+_SWEEP_VERDICTS = {
+    "analytic_verdict": ANALYTIC_VERDICTS,
+    "simulated_verdict": SIMULATED_VERDICTS,
+    "walk": WALK_COLUMN_VERDICTS,
+}
 _LAYOUTS = {
     COLUMNS: "a sweep without a controller or command_noise key",
     CONTROLLER_COLUMNS: "a sweep with a controller key",

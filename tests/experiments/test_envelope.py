@@ -14,6 +14,7 @@ from slopewalk.bench.experiments.envelope.cell import run_cell
 from slopewalk.bench.experiments.envelope.config import envelope_from_dict
 from slopewalk.bench.experiments.envelope.run import compare_budgets, convergence_cells
 from slopewalk.bench.sim.model import ACTUATOR_MODES
+from slopewalk.bench.sim.walk_check import WALK_VERDICTS
 from slopewalk.bench.tables.envelope import ENVELOPE
 from slopewalk.bench.tables.table import read_table
 from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
@@ -61,6 +62,9 @@ def test_a_tiny_envelope_writes_one_row_per_cell_and_the_figure(tiny):
         assert r["error"] == "" and r["ga_evaluations"] == 2 * 10 * 4
         for mode in ACTUATOR_MODES:  # the max-margin gait is played in every mode the bench has
             assert r[f"maxmargin_{mode}_verdict"] in ("stable", "slip", "tip", "fall", "diverged")
+            strict = r[f"maxmargin_{mode}_walk"]  # the strict walk verdict beside it
+            balance = r[f"maxmargin_{mode}_verdict"]
+            assert strict == balance if balance != "stable" else strict in WALK_VERDICTS
     flat = rows[0]
     assert flat["feasible"] == "True" and flat["minwork_found"] == "True"  # 1 s on flat ground
     assert rows[2]["feasible"] == "False"  # 0.5 s: the paper's family has no gait inside
@@ -153,6 +157,7 @@ def test_a_cell_that_raises_is_an_error_row(tmp_path):
     row = run_cell(cell)
     assert row["error"].startswith("step time 0.009 s: must lie in") and "\n" not in row["error"]
     assert all(row[f"maxmargin_{m}_verdict"] == "error" for m in ACTUATOR_MODES)
+    assert all(row[f"maxmargin_{m}_walk"] == "error" for m in ACTUATOR_MODES)
     assert ENVELOPE.parse(ENVELOPE.header + ENVELOPE.format_row(row), tmp_path)[0]
 
 
@@ -240,7 +245,7 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
 def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
     """The plan as a controller (``slopewalk.bench.sim.env:open_loop``) walks as open loop does; the
     ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""
-    from slopewalk.bench.tables.envelope import envelope_format, sim_columns
+    from slopewalk.bench.tables.envelope import envelope_format, sim_columns, walk_column
 
     plan_policy = "slopewalk.bench.sim.env:open_loop"
     ankle = "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback"
@@ -261,6 +266,8 @@ def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_o
         same, same_rms = sim_columns(gait, "stiff", "open_loop")
         ankle_verdict, ankle_rms = sim_columns(gait, "stiff", "ankle_cop_feedback")
         assert row[verdict] == "stable" == row[same] == row[ankle_verdict]
+        assert row[walk_column(gait, "stiff")] == row[walk_column(gait, "stiff", "open_loop")]
+        assert row[walk_column(gait, "stiff", "ankle_cop_feedback")] in WALK_VERDICTS
         assert abs(row[same_rms] - row[rms]) < 1e-3  # [mm]: the same trial, stepped
         assert abs(row[ankle_rms] - row[rms]) > 1e-3  # the controller moved the CoP
         assert row[sim_columns(gait, "servo", "ankle_cop_feedback")[0]] == ""  # not asked

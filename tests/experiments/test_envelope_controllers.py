@@ -68,7 +68,7 @@ def test_the_plan_as_a_controller_walks_the_cells_open_loop_walks(table):
     cells = [c.strip() for c in row.strip("|").split("|")]
     played = sum(j.gait == "maxmargin" for j in jobs)
     assert cells[2:5] == [str(played), cells[3], f"{cells[3]} (+0 −0)"]
-    assert f"have the table's verdict in {len(jobs)} of {len(jobs)}" in text
+    assert f"have the table's balance verdict in {len(jobs)} of {len(jobs)}" in text
     tally = (
         "- open_loop walks strictly more cells than open loop in 0 of these 2 rows, as many in 2"
     )

@@ -269,7 +269,7 @@ def test_a_killed_worker_costs_only_its_trial(tmp_path):
     assert all(",stable," in r or ",zmp_outside," in r for r in rows if r not in died)
     summary = err.read_text()  # stdout and stderr
     assert "5 trials: 5 run, 0 already done, 1 errors, 0 lost" in summary
-    assert "analytic / simulated verdicts: error/error 1, " in summary
+    assert "analytic / simulated / walk verdicts: error/error/error 1, " in summary
     resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True)
     assert resumed.returncode == 0 and "5 already done, 0 to run" in resumed.stderr
 
@@ -338,7 +338,7 @@ def test_a_trial_an_executor_lost_leaves_no_row_and_resume_finishes_it(tmp_path,
 
 def test_the_verdict_line_is_never_empty():
     summary = SweepSummary(Path("t.csv"), 1, 0, 0, 0, ("x: lost",), 0, 1.0, {})
-    assert summary.lines()[1] == "analytic / simulated verdicts: none (no row written)"
+    assert summary.lines()[1] == "analytic / simulated / walk verdicts: none (no row written)"
 
 
 def test_default_output_is_the_working_directorys_results(tmp_path, monkeypatch, capsys):

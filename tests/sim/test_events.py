@@ -40,6 +40,7 @@ def _standing(**changes) -> dict:
         "cop": np.zeros((N, 2)),
         "sole": np.tile([[0.0, 0.04, 0.0], [0.0, -0.04, 0.0]], (N, 1, 1)),
         "foot_normal": np.tile([0.0, 0.0, 1.0], (N, 2, 1)),
+        "foot_axis_x": np.tile([1.0, 0.0, 0.0], (N, 2, 1)),
         "pelvis_height": np.full(N, HIP),
         "pelvis_qpos": np.tile([0, 0, HIP, 1, 0, 0, 0], (N, 1)),
         "touching": np.zeros(N, bool),

@@ -98,11 +98,13 @@ def test_a_trial_without_predictions_simulates_the_same_and_claims_no_verdict(sp
     full = run_trial(spec, TrialSpec(plan.params), plan=plan).scalars()
     bare = run_trial(spec, TrialSpec(plan.params), plan=plan, predict=False).scalars()
     predicted = {"compliant_verdict", "compliant_min_margin", "predicted_verdict",
-                 "predicted_events", "predicted_rotation", "wall_s", "null_because"}  # fmt: skip
+                 "predicted_events", "predicted_rotation", "wall_s", "null_because",
+                 "predicted_walk_verdict"}  # fmt: skip
     assert {k: v for k, v in bare.items() if k not in predicted} == {
         k: v for k, v in full.items() if k not in predicted
     }
     assert bare["predicted_verdict"] == bare["compliant_verdict"] == NOT_PREDICTED
+    assert bare["predicted_walk_verdict"] == NOT_PREDICTED
     assert bare["predicted_events"] == [] and bare["predicted_rotation"] is None
     assert bare["null_because"]["predicted_rotation"].startswith("not predicted")
 

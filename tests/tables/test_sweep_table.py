@@ -18,7 +18,12 @@ ID = "0123456789ab"
 
 
 def _row(**values) -> dict:
-    return {"trial_id": ID, "analytic_verdict": "stable", "simulated_verdict": "tip"} | values
+    return {
+        "trial_id": ID,
+        "analytic_verdict": "stable",
+        "simulated_verdict": "tip",
+        "walk": "tip",
+    } | values
 
 
 def test_table_appends_whole_rows_and_survives_a_torn_line(tmp_path):

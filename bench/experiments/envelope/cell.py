@@ -50,7 +50,13 @@ import numpy as np
 
 from slopewalk.bench.batch.executor import one_line
 from slopewalk.bench.experiments.sweep.trials import TIMESTEP, spec_text
-from slopewalk.bench.tables.envelope import GAITS, REPLAN_NOTE, controller_tag, sim_columns
+from slopewalk.bench.tables.envelope import (
+    GAITS,
+    REPLAN_NOTE,
+    controller_tag,
+    sim_columns,
+    walk_column,
+)
 from slopewalk.planner.spec import RobotSpec
 
 # (Hz, Szmax, θ1max) and (…, δ, L, w): planner/gait_search.py's FAMILIES
@@ -198,7 +204,13 @@ class _Shifted:
 def error_row(cell: EnvelopeCell, cause: str) -> dict:
     """The row of a cell that raised or killed its worker."""
     tags = ["", *(controller_tag(c) for c in cell.controllers)]
-    verdicts = {sim_columns(g, m, t)[0]: "error" for g in GAITS for m in cell.modes for t in tags}
+    verdicts = {
+        c: "error"
+        for g in GAITS
+        for m in cell.modes
+        for t in tags
+        for c in (sim_columns(g, m, t)[0], walk_column(g, m, t))
+    }
     return cell.inputs() | verdicts | {"error": cause}
 
 
@@ -410,7 +422,11 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
             result = run_trial(cell.spec, trial, plan=plan, predict=False)  # simulated columns
             tag = controller_tag(controller) if controller else ""
             verdict, rms = sim_columns(gait, mode, tag)
-            out |= {verdict: result.simulated_verdict, rms: result.zmp_rms * 1e3}
+            out |= {
+                verdict: result.simulated_verdict,
+                rms: result.zmp_rms * 1e3,
+                walk_column(gait, mode, tag): result.walk_verdict,
+            }
             if record_dir is not None and i == 0:
                 from slopewalk.bench.experiments.sweep.run import _record
 

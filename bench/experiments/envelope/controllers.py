@@ -10,7 +10,7 @@ re-planned at 1 ms, no GA run again) or from an envelope file
 walks each gait open loop (one ``mujoco.rollout``) and with each controller
 (``slopewalk.bench.sim.env``) on local worker processes; ``envelope_report`` writes the
 markdown section of ``results/controllers.md``: per gait and mode, how many
-cells walk (simulated verdict ``stable``) open loop and with each controller,
+cells walk (strict walk verdict ``walked``) open loop and with each controller,
 and which cells each controller gains and loses.
 
 The table keeps hip height and swing lift to 0.1 µm and the tilt to 1e-5 deg, so a
@@ -33,6 +33,8 @@ from slopewalk.bench.sim.model import ACTUATOR_MODES
 from slopewalk.bench.tables.envelope import GAITS, controller_tag, sim_columns
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.spec import RobotSpec
+
+WALK = "walk"  # the key of a strict walk verdict in ``play_gait``'s answer
 
 GAIT_NAMES = {"maxmargin": "max-margin", "minwork": "min-work"}
 _INPUTS = ("cell_id", "step_time", "slope_deg", "friction", "robot", "steps", "error")
@@ -204,7 +206,8 @@ def config_jobs(config, *, workers: int = 1, min_step_time: float = 0.0) -> list
 
 
 def play_gait(job_and_controllers) -> dict:
-    """{(mode, controller or None): simulated verdict} of one gait, re-planned at 1 ms."""
+    """{(mode, controller or None): balance verdict, (mode, controller or None, WALK): strict
+    walk verdict} of one gait, re-planned at 1 ms."""
     import numba
 
     from slopewalk.bench.experiments.sweep.trials import TIMESTEP
@@ -216,7 +219,7 @@ def play_gait(job_and_controllers) -> dict:
     numba.set_num_threads(1)  # one per worker process
     params = job.params()
     plan = plan_walk(job.spec, params)
-    out = {}
+    out: dict[tuple, str] = {}
     for mode in job.modes:
         for controller in (None, *controllers):
             trial = TrialSpec(
@@ -225,6 +228,7 @@ def play_gait(job_and_controllers) -> dict:
             )  # fmt: skip
             result = run_trial(job.spec, trial, plan=plan, predict=False)  # simulated only
             out[mode, controller] = result.simulated_verdict
+            out[mode, controller, WALK] = result.walk_verdict
     return out
 
 
@@ -248,7 +252,9 @@ def envelope_report(
         "1 ms from the table's parameters (no GA run again) and walked in each actuator mode "
         "the table played, open loop and with each controller "
         f"({', '.join(f'`{c}`' for c in controllers)}). A cell *walks* when that gait's "
-        "simulated verdict is `stable`. Cells: how many walk; in brackets, the cells a "
+        "strict walk verdict is `walked` (balanced, on its footprints, the swing foot off the "
+        "plane, the pelvis at the end pose, every actuator within the servo's stall torque: "
+        "`docs/verdicts.md`). Cells: how many walk; in brackets, the cells a "
         "controller gains and loses against open loop.",
         "",
         "| gait | mode | gaits played | open loop | " + " | ".join(tags) + " |",
@@ -266,10 +272,10 @@ def envelope_report(
         ]  # fmt: skip
         if not picked:
             continue
-        base = [v[mode, None] == "stable" for _, v in picked]
+        base = [v[mode, None, WALK] == "walked" for _, v in picked]
         cells_text = []
         for controller, tag in zip(controllers, tags, strict=True):
-            walks = [v[mode, controller] == "stable" for _, v in picked]
+            walks = [v[mode, controller, WALK] == "walked" for _, v in picked]
             gained = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w > b]
             lost = [j.label for (j, _), w, b in zip(picked, walks, base, strict=True) if w < b]
             cells_text.append(f"{sum(walks)} (+{len(gained)} −{len(lost)})")
@@ -297,7 +303,7 @@ def envelope_report(
         lines += [
             "",
             f"The open-loop walks played again from the table's parameters (as rounded in the "
-            f"table) have the table's verdict in {agree} of {compared} (gait, mode) walks; "
+            f"table) have the table's balance verdict in {agree} of {compared} (gait, mode) walks; "
             "the others differ by that rounding or by a change of the bench since the table "
             "was written. The counts above compare like with like: open loop and controllers "
             "from the same re-planned gait.",

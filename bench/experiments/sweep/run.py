@@ -119,6 +119,7 @@ def error_row(trial: SweepTrial, cause: str) -> dict:
     return trial.inputs() | {
         "analytic_verdict": "error",
         "simulated_verdict": "error",
+        "walk": "error",
         "error": cause,
     }
 
@@ -182,12 +183,12 @@ class SweepSummary:
     lost_workers: tuple[str, ...] = ()
 
     def lines(self) -> list[str]:
-        verdicts = ", ".join(f"{a}/{s} {n}" for (a, s), n in sorted(self.verdicts.items()))
+        verdicts = ", ".join(f"{'/'.join(v)} {n}" for v, n in sorted(self.verdicts.items()))
         out = [
             f"sweep: {self.total} trials: {self.ran} run, {self.resumed} already done, "
             f"{self.errors} errors, {len(self.lost)} lost, in {self.wall_s:.1f} s"
             + (f" ({self.sim_steps / self.wall_s:.0f} sim steps/s)" if self.ran else ""),
-            "analytic / simulated verdicts: " + (verdicts or "none (no row written)"),
+            "analytic / simulated / walk verdicts: " + (verdicts or "none (no row written)"),
             f"wrote {self.table}",
         ]
         lost = [f"lost: {line}" for line in self.lost[:5]]
