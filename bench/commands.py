@@ -191,7 +191,10 @@ def trial(args: argparse.Namespace) -> None:
     result = run_trial(spec, trial, plan=plan, scene=scene)
     scalars = result.scalars()
     if scene is not None:  # marked with the model it was played on
-        scalars["model"] = {"name": scene.name, "path": str(args.model), "map": args.map}
+        from slopewalk.bench.robot_import.model_file import contents_digest
+
+        scalars["model"] = {"name": scene.name, "path": str(args.model), "map": args.map,
+                            "sha256": contents_digest(args.model, args.map)}  # fmt: skip
     with atomic_paths(*outputs.values()) as tmps:
         tmp = dict(zip(outputs, tmps, strict=True))
         tmp["--out"].write_text(json.dumps(scalars, indent=2, allow_nan=False) + "\n")
@@ -215,12 +218,15 @@ def _trial_robot(args: argparse.Namespace, load_spec):
         if args.map is not None:
             raise SlopewalkError(f"--map {args.map!r}: only with --model, which is not given")
         return load_spec(args.robot), None
-    for flag, given in (("--controller", args.controller), ("--record", args.record),
-                        ("--video", args.video)):  # fmt: skip
+    for flag, given, why in (
+        ("--controller", args.controller, "the closed loop steps the twin's scene only"),
+        ("--record", args.record, "a recording redraws the twin's bodies, not the model's"),
+        ("--video", args.video, "the video renders the twin's scene, not the model's"),
+    ):
         if given is not None:
             raise SlopewalkError(
-                f"{flag} with --model: not yet (a model plays open loop, recorded as "
-                "--out and --series)"
+                f"{flag} with --model: not yet ({why}); a model plays the plan open loop, "
+                "written as --out and --series"
             )
     from slopewalk.bench.robot_import.scene import model_scene
 
@@ -428,7 +434,9 @@ def sweep(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments.sweep.config import SweepError, load_sweep
     from slopewalk.bench.experiments.sweep.run import run_sweep
 
-    config = load_sweep(args.config)  # the whole file is checked before anything runs
+    model = _batch_model(args, SweepError)
+    config = load_sweep(args.config, model=model)  # the whole file is checked before anything runs
+    _batch_on_model(args, config.model, SweepError)
     out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
     with _batch_executor(args) as executor:
         summary = run_sweep(
@@ -446,6 +454,34 @@ def sweep(args: argparse.Namespace) -> None:
     if args.config is None or args.report:
         envelope = out / "envelope" / "envelope.csv"
         _write_claims(out, summary.table, envelope if envelope.exists() else None, config)
+
+
+def _batch_model(args: argparse.Namespace, error: type[SlopewalkError]):
+    """``--model`` (with ``--map``) of ``sweep`` and ``envelope`` as a ``ModelFile``: its
+    paths made absolute and its files' digest taken, for every job and worker; None."""
+    from slopewalk.bench.robot_import.mapfile import RobotImportError
+    from slopewalk.bench.robot_import.model_file import ModelFile
+
+    if args.model is None:
+        if args.map is not None:
+            raise error(f"--map {args.map!r}: only with --model, which is not given")
+        return None
+    try:
+        return ModelFile.of(args.model, args.map)
+    except RobotImportError as err:
+        raise error(f"--model: {err}") from None
+
+
+def _batch_on_model(args: argparse.Namespace, model, error: type[SlopewalkError]) -> None:
+    """Refuse what a run on a model (``--model`` or the file's ``model`` key) cannot do."""
+    if model is None:
+        return
+    for flag, given, why in (
+        ("--record", args.record, "a recording redraws the twin's bodies, not the model's"),
+        ("--report", args.report, "the claims and figures are the paper's biped's"),
+    ):
+        if given:
+            raise error(f"{flag} with a model ({model.name}): {why}")
 
 
 def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkError]):
@@ -606,7 +642,9 @@ def envelope(args: argparse.Namespace) -> None:
     )
     from slopewalk.bench.report.envelope_claims import write_envelope_documents
 
-    config = load_envelope(args.config)  # the whole file is checked before anything runs
+    model = _batch_model(args, EnvelopeError)
+    config = load_envelope(args.config, model=model)  # checked whole before anything runs
+    _batch_on_model(args, config.model, EnvelopeError)
     out, resume = _batch_start(args, Path.cwd() / "results" / "envelope", EnvelopeError)
     progress = sys.stderr.isatty()
     with _batch_executor(args) as executor:

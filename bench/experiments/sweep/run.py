@@ -54,6 +54,7 @@ from slopewalk.bench.tables.sweep import (
     SWEEP_NOISE,
     outcome_columns,
 )
+from slopewalk.bench.tables.table import model_format
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -101,8 +102,10 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
     from slopewalk.planner.plan import plan_walk
 
     try:
+        # a model is fitted once per worker, its files' digest checked for every trial
+        scene = None if trial.model is None else trial.model.scene(trial.spec)
         plan = plan_walk(trial.spec, trial.gait())
-        result = run_trial(trial.spec, trial.trial_spec(), plan=plan)
+        result = run_trial(trial.spec, trial.trial_spec(), plan=plan, scene=scene)
         row = trial.inputs() | outcome_columns(result, plan)
         if record_dir is not None:
             try:
@@ -135,6 +138,11 @@ SWEEP_BATCH = Batch(
     unit="trials",
 )
 __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep"]
+
+
+def on_model(model) -> str:
+    """ " on model NAME (sha256:…)": what a run's messages add to its file's name."""
+    return "" if model is None else f" on model {model.name} ({model.short_digest})"
 
 
 def _record(directory: Path, trial_id: str, plan, result) -> None:
@@ -255,13 +263,17 @@ def run_sweep(
             return ""
         return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
+    # a controller, command noise or other gaits add columns (tables/sweep.py), a model its own
+    fmt = (
+        SWEEP_CONTROLLER
+        if config.closed_loop
+        else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP))
+    )
     result = run_batch(
-        replace(  # a controller, command noise or other gaits add columns (tables/sweep.py)
+        replace(
             SWEEP_BATCH,
-            source=config.source,
-            fmt=SWEEP_CONTROLLER
-            if config.closed_loop
-            else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP)),
+            source=config.source + on_model(config.model),
+            fmt=fmt if config.model is None else model_format(fmt),
         ),
         config.trials,
         total,
