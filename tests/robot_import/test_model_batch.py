@@ -174,3 +174,22 @@ def test_load_sweep_takes_the_flag(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(SWEEP)
     assert load_sweep(path, model=ModelFile.of(WALKER)).trials[0].robot == "imported"
+
+
+def test_envelope_on_a_model_through_the_cli_marks_its_table_and_documents(tmp_path, capsys):
+    config = tmp_path / "walker-env.toml"
+    config.write_text(
+        "steps = 2\n[grid]\nstep_time = [3.0]\nslope = [0]\n"
+        "[search]\npopulation = 10\ngenerations = 3\n"
+    )
+    out = tmp_path / "env"
+    argv = ["envelope", config, "--model", WALKER, "--map", MAP, "--out", out, "--workers", "1"]
+    code, err = _run(argv, capsys)
+    assert code == 0, err
+    (row,) = _rows(out / "envelope.csv")
+    assert (row["model"], row["robot"], row["error"]) == ("walker", "imported", "")
+    assert row["model_digest"] == "sha256:" + contents_digest(WALKER, MAP)[:16]
+    played = [row[f"maxmargin_{m}_verdict"] for m in ("servo", "servo_ff")]
+    assert all(played) and not row["maxmargin_stiff_verdict"], row
+    boundaries = (out / "boundaries.md").read_text()
+    assert f"played on the unmodified model walker ({row['model_digest']})" in boundaries
