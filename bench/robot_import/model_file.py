@@ -66,9 +66,11 @@ class ModelFile:
         for flag, file in (("model", model), ("map file", mapped)):
             if file is not None and not file.is_file():
                 raise RobotImportError(f"{flag} {str(file)!r}: no such file")
+        digest = contents_digest(model, mapped)  # before the fit: the bytes it reads
         scene = model_scene(model, mapped)
-        return cls(str(model), None if mapped is None else str(mapped),
-                   contents_digest(model, mapped), scene.name)  # fmt: skip
+        out = cls(str(model), None if mapped is None else str(mapped), digest, scene.name)
+        _SCENES[out] = scene  # this process needs not fit it again
+        return out
 
     @property
     def short_digest(self) -> str:

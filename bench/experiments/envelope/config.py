@@ -33,6 +33,12 @@ in every mode, by each of them, into columns of their own (``envelope/cell.py``)
 A controller that does not import, or two whose callables share a name (they
 name the columns), is refused before any cell runs.
 
+``model`` and ``map`` (paths relative to the file; ``envelope --model MODEL --map MAP``
+replaces both) play every found gait on that unmodified MJCF/URDF model: ``robot``
+then defaults to ``["imported"]`` (the spec imported from it now), ``actuators`` to
+the modes a model plays in (``robot_import.scene.model_modes``); the paper's robot
+and controllers are refused; the model's digest enters every ``cell_id``.
+
 Every key is checked: an unknown key, a value of the wrong type or out of its
 range is refused in one line naming the key, the value and the range (the
 sweep file's rules, ``sweep/config.py``, whose helpers this module uses).

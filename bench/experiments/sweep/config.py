@@ -38,6 +38,14 @@ slope and μ, is a trial in every ``actuators`` mode of the ``[grid]`` (whose ot
 must be left out). Either makes the table's ``gait`` columns
 (``tables.sweep.GAIT_COLUMNS``); neither goes with a controller or command noise.
 
+``model`` and ``map`` (paths relative to the file; ``sweep --model MODEL --map MAP``
+replaces both) play every trial on that unmodified MJCF/URDF model
+(``robot_import.model_file.ModelFile``): ``robot`` then defaults to ``"imported"`` (the
+spec imported from the model now; a path names an edited spec), ``actuators`` to
+``"servo_ff"``; the paper's robot, ``mass_scale``, controllers and ``envelope`` are
+refused, the model's digest enters every ``trial_id`` and the table gains the
+``model`` and ``model_digest`` columns (``tables.table.model_format``).
+
 ``[[grid]]`` may also be an array of tables; the sweep is the union of their
 products and the ``[[trial]]`` entries, de-duplicated by ``trial_id`` (first
 occurrence kept, in file order).
