@@ -582,6 +582,11 @@ def controllers(args: argparse.Namespace) -> None:
         raise ControllerError("--min-step-time: only with --envelope")
     envelope = _envelope_gaits(args) if args.envelope else None  # checked before any trial
     config = load_sweep(args.config)
+    if config.model is not None:
+        raise ControllerError(
+            f"{config.source}: names the model {config.model.name}: the controllers step the "
+            "twin's scene only (a model plays the plan open loop); give a sweep file without model"
+        )
     if config.noisy:
         raise ControllerError(
             f"{config.source}: command_noise = {config.command_noise_deg:g} deg: the "
@@ -624,6 +629,11 @@ def _envelope_gaits(args: argparse.Namespace):
         from slopewalk.bench.experiments.envelope.config import load_envelope
 
         config = load_envelope(path)
+        if config.model is not None:
+            raise ec.EnvelopeTableError(
+                f"--envelope {args.envelope}: names the model {config.model.name}: the "
+                "controllers step the twin's scene only (a model plays the plan open loop)"
+            )
         return lambda: ec.config_jobs(config, workers=args.workers, min_step_time=low)
     jobs = ec.table_jobs(path, min_step_time=low)
     if not jobs:

@@ -88,6 +88,7 @@ INPUTS = {  # file name in {in} -> content
     "model_sweep.toml": 'model = "no.xml"\n' + ENVELOPE,
     "map_sweep.toml": 'map = "walker-map.toml"\n' + ENVELOPE,
     "stiff_model_sweep.toml": 'model = "walker.xml"\n' + ENVELOPE + 'actuators = ["stiff"]\n',
+    "walker_sweep.toml": 'model = "walker.xml"\n' + ENVELOPE,
     "envelope_clash.toml": ENVELOPE  # two callables of one name: their columns would clash
     + 'controller = ["slopewalk.bench.controllers:load_controller",'
     + ' "slopewalk.bench.sim.closed_loop:load_controller"]\n',
@@ -186,6 +187,10 @@ CASES = [
     (
         ["sweep", "{in}/stiff_model_sweep.toml"],
         "grid.actuators = 'stiff' with a model: it plays on its own actuators",
+    ),
+    (
+        ["controllers", "{in}/walker_sweep.toml"],
+        "walker_sweep.toml: names the model walker: the controllers step the twin's scene only",
     ),
     ([*PLAN, "--slope", "60"], "--slope: 60: must lie in (-60, 60) deg"),
     ([*PLAN, "--slope", "-75"], "--slope: -75: must lie in (-60, 60) deg"),

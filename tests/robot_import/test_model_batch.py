@@ -193,3 +193,17 @@ def test_envelope_on_a_model_through_the_cli_marks_its_table_and_documents(tmp_p
     assert all(played) and not row["maxmargin_stiff_verdict"], row
     boundaries = (out / "boundaries.md").read_text()
     assert f"played on the unmodified model walker ({row['model_digest']})" in boundaries
+
+
+def test_controllers_refuse_an_envelope_played_on_a_model(tmp_path, capsys):
+    """The controllers step the twin's scene: an envelope of a model is refused, not
+    walked on the twin in its place."""
+    from slopewalk.bench.experiments.envelope.controllers import EnvelopeTableError, table_jobs
+
+    table = ROBOTS.parents[1] / "results" / "robots" / "walker" / "envelope" / "envelope.csv"
+    with pytest.raises(EnvelopeTableError, match="was played on the model walker"):
+        table_jobs(table)
+    config = tmp_path / "walker-env.toml"
+    config.write_text(f'model = "{WALKER}"\n[grid]\nstep_time = [3.0]\nslope = [0]\n')
+    code, err = _run(["controllers", "--envelope", config, "--out", tmp_path / "c.md"], capsys)
+    assert code == 2 and "names the model walker: the controllers step the twin's" in err, err
