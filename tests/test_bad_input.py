@@ -140,10 +140,10 @@ CASES = [
             "{out}/t.json",
             "--model",
             "tests/robots/walker.xml",
-            "--record",
-            "{out}/t.rrd",
+            "--video",
+            "{out}/t.mp4",
         ],
-        "--record with --model: not yet",
+        "--video with --model: not yet (the video renders the twin's scene",
     ),
     (
         [
@@ -181,8 +181,8 @@ CASES = [
     (["sweep", "{in}/model_sweep.toml"], "model_sweep.toml: model '{in}/no.xml': no such file"),
     (["sweep", "{in}/map_sweep.toml"], "map = 'walker-map.toml': only with a model key"),
     (
-        ["sweep", "{in}/plain_sweep.toml", "--model", "{in}/walker.xml", "--record"],
-        "--record with a model (walker): a recording redraws the twin's bodies",
+        ["sweep", "{in}/plain_sweep.toml", "--model", "{in}/walker.xml", "--report"],
+        "--report with a model (walker): the claims and figures are the paper's biped's",
     ),
     (
         ["sweep", "{in}/stiff_model_sweep.toml"],

@@ -207,3 +207,36 @@ def test_controllers_refuse_an_envelope_played_on_a_model(tmp_path, capsys):
     config.write_text(f'model = "{WALKER}"\n[grid]\nstep_time = [3.0]\nslope = [0]\n')
     code, err = _run(["controllers", "--envelope", config, "--out", tmp_path / "c.md"], capsys)
     assert code == 2 and "names the model walker: the controllers step the twin's" in err, err
+
+
+def test_a_recording_on_the_model_redraws_its_own_bodies_where_the_sensors_saw_them(
+    tmp_path, capsys
+):
+    """``trial --model --record``: the model's own qpos (``model_qpos``) is recorded, and
+    MuJoCo's kinematics of it put the pelvis where the trial's pelvis sensor saw it, every
+    row (settling and walk); the .rrd is written."""
+    import mujoco
+    import numpy as np
+
+    from slopewalk.bench.robot_import.scene import model_scene
+    from slopewalk.bench.sim.trial import simulated_rows
+    from slopewalk.planner.gait import GaitParams
+    from slopewalk.planner.plan import plan_walk
+
+    out = {k: tmp_path / f"t.{k}" for k in ("json", "npz", "rrd")}
+    argv = ["trial", "--model", WALKER, "--map", MAP, *CELL, "--out", out["json"]]
+    code, err = _run([*argv, "--series", out["npz"], "--record", out["rrd"]], capsys)
+    assert code == 0, err
+    assert out["rrd"].stat().st_size > 0
+    sim = simulated_rows(dict(np.load(out["npz"])))
+    scene = model_scene(WALKER, MAP)
+    plan = plan_walk(scene.spec, GaitParams.nominal(scene.spec, 1.0, steps=1))
+    model = scene.build(plan, friction=1.0, actuators="servo_ff", timestep=0.001)
+    assert sim["model_qpos"].shape == (sim["t"].size, model.nq)
+    data = mujoco.MjData(model)
+    pelvis = np.empty((sim["t"].size, 3))
+    for k, qpos in enumerate(sim["model_qpos"]):
+        data.qpos[:] = qpos
+        mujoco.mj_kinematics(model, data)
+        pelvis[k] = data.site("slopewalk_pelvis").xpos
+    np.testing.assert_allclose(pelvis, sim["qpos"][:, :3], rtol=0, atol=1e-12)

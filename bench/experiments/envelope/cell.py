@@ -400,7 +400,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
 
                 name = f"{cell.cell_id}_{tag}" if tag else cell.cell_id
                 try:
-                    _record(Path(record_dir), name, plan, result)
+                    _record(Path(record_dir), name, plan, result, scene)
                 except Exception as err:  # the cell stands; a re-run with --record retries
                     out["error"] = f"recording failed: {one_line(err)}"
     return out

@@ -109,7 +109,7 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
         row = trial.inputs() | outcome_columns(result, plan)
         if record_dir is not None:
             try:
-                _record(Path(record_dir), trial.trial_id, plan, result)
+                _record(Path(record_dir), trial.trial_id, plan, result, scene)
             except Exception as err:  # the trial stands; a re-run with --record retries
                 row["error"] = f"recording failed: {one_line(err)}"
     except Exception as err:  # a trial's failure is a result, not a crash of the sweep
@@ -145,7 +145,7 @@ def on_model(model) -> str:
     return "" if model is None else f" on model {model.name} ({model.short_digest})"
 
 
-def _record(directory: Path, trial_id: str, plan, result) -> None:
+def _record(directory: Path, trial_id: str, plan, result, scene=None) -> None:
     """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place; its plots
     at ``SWEEP_PLOT_RATE`` (a tenth of a trial's, a third of the size per simulated second)."""
     from slopewalk.bench.sim.recording import SWEEP_PLOT_RATE, record_trial
@@ -153,7 +153,7 @@ def _record(directory: Path, trial_id: str, plan, result) -> None:
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"
     try:
-        written = record_trial(tmp, plan, result, plot_rate=SWEEP_PLOT_RATE)
+        written = record_trial(tmp, plan, result, plot_rate=SWEEP_PLOT_RATE, scene=scene)
         os.replace(written or tmp, directory / f"{trial_id}.rrd")
     finally:
         with contextlib.suppress(FileNotFoundError):
