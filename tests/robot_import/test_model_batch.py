@@ -184,13 +184,16 @@ def test_envelope_on_a_model_through_the_cli_marks_its_table_and_documents(tmp_p
     )
     out = tmp_path / "env"
     argv = ["envelope", config, "--model", WALKER, "--map", MAP, "--out", out, "--workers", "1"]
-    code, err = _run(argv, capsys)
+    code, err = _run([*argv, "--convergence"], capsys)  # a search again, of the same model
     assert code == 0, err
     (row,) = _rows(out / "envelope.csv")
     assert (row["model"], row["robot"], row["error"]) == ("walker", "imported", "")
     assert row["model_digest"] == "sha256:" + contents_digest(WALKER, MAP)[:16]
     played = [row[f"maxmargin_{m}_verdict"] for m in ("servo", "servo_ff")]
     assert all(played) and not row["maxmargin_stiff_verdict"], row
+    (again,) = _rows(out / "convergence.csv")
+    assert (again["model"], again["model_digest"]) == ("walker", row["model_digest"])
+    assert (out / "convergence.md").exists()
     boundaries = (out / "boundaries.md").read_text()
     assert f"played on the unmodified model walker ({row['model_digest']})" in boundaries
 

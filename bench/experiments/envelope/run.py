@@ -315,6 +315,8 @@ def _by_id(path, fmt) -> dict[str, dict]:
 def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergence:
     """The ``Convergence`` of the rows of ``base`` in ``table`` vs ``bigger`` in the other."""
     fmt = envelope_format(base[0].controllers if base else ())
+    if base and base[0].model is not None:
+        fmt = model_format(fmt)
     small, large = _by_id(table, fmt), _by_id(bigger_table, fmt)
     flips = found_flips = 0
     change = change_all = work_change = 0.0
