@@ -203,7 +203,7 @@ def trial(args: argparse.Namespace) -> None:
             with open(tmp["--series"], "wb") as f:
                 np.savez_compressed(f, **result.series)
         if "--video" in tmp:
-            render_video(tmp["--video"], plan, result)
+            render_video(tmp["--video"], plan, result, scene=scene)
         if "--record" in tmp:
             record_trial(
                 tmp["--record"], plan, result, plot_rate=args.record_rate,
@@ -232,15 +232,12 @@ def _check_model_flags(args: argparse.Namespace) -> None:
         if args.map is not None:
             raise SlopewalkError(f"--map {args.map!r}: only with --model, which is not given")
         return
-    for flag, given, why in (
-        ("--controller", args.controller, "the closed loop steps the twin's scene only"),
-        ("--video", args.video, "the video renders the twin's scene, not the model's"),
-    ):
-        if given is not None:
-            raise SlopewalkError(
-                f"{flag} with --model: not yet ({why}); a model plays the plan open loop, "
-                "written as --out, --series and --record"
-            )
+    if args.controller is not None:
+        raise SlopewalkError(
+            "--controller with --model: not yet (the closed loop steps the twin's scene "
+            "only); a model plays the plan open loop, written as --out, --series, --record "
+            "and --video"
+        )
 
 
 def _check_media_flags(args: argparse.Namespace) -> None:

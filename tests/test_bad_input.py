@@ -140,18 +140,6 @@ CASES = [
             "{out}/t.json",
             "--model",
             "tests/robots/walker.xml",
-            "--video",
-            "{out}/t.mp4",
-        ],
-        "--video with --model: not yet (the video renders the twin's scene",
-    ),
-    (
-        [
-            *TRIAL,
-            "--out",
-            "{out}/t.json",
-            "--model",
-            "tests/robots/walker.xml",
             "--controller",
             "slopewalk.bench.controllers.ankle_cop:ankle_cop_feedback",
         ],

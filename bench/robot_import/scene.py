@@ -87,8 +87,22 @@ class ModelScene:
             for kind in JOINT_LIMIT_KEYS
         ]
 
+    @property
+    def base_name(self) -> str:
+        """The name of the model's base body (the spec's pelvis)."""
+        return self.fit.model.body(self.fit.base).name
+
     def build(self, plan, *, friction: float, actuators: str, timestep: float) -> mujoco.MjModel:
         """The model on the plan's tilted plane with the trial's sensors (module doc)."""
+        mjs = self.editable(plan, friction=friction, actuators=actuators, timestep=timestep)
+        try:
+            return mjs.compile()
+        except ValueError as err:
+            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+
+    def editable(self, plan, *, friction: float, actuators: str, timestep: float) -> mujoco.MjSpec:
+        """``build``'s scene before it is compiled, for a caller that adds to it (a video's
+        camera)."""
         if actuators not in model_modes(self.spec):
             raise SceneError(
                 f"--actuators {actuators}: a model plays on its own actuators (gains "
@@ -113,10 +127,7 @@ class ModelScene:
         self._add_sites(mjs)
         self._add_sensors(mjs)
         mjs.add_numeric(name=JOINT_SIGN, data=[sign for _, sign in self.joints()])
-        try:
-            return mjs.compile()
-        except ValueError as err:
-            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+        return mjs
 
     def _position_actuated(self, mjs: mujoco.MjSpec) -> set[str]:
         """Joints a position actuator of the model drives (gear 1, kp = the spec's)."""

@@ -215,9 +215,9 @@ def test_controllers_refuse_an_envelope_played_on_a_model(tmp_path, capsys):
 def test_a_recording_on_the_model_redraws_its_own_bodies_where_the_sensors_saw_them(
     tmp_path, capsys
 ):
-    """``trial --model --record``: the model's own qpos (``model_qpos``) is recorded, and
-    MuJoCo's kinematics of it put the pelvis where the trial's pelvis sensor saw it, every
-    row (settling and walk); the .rrd is written."""
+    """``trial --model --record --video``: the model's own qpos (``model_qpos``) is
+    recorded, and MuJoCo's kinematics of it put the pelvis where the trial's pelvis sensor
+    saw it, every row (settling and walk); the .rrd and the .mp4 are written."""
     import mujoco
     import numpy as np
 
@@ -226,11 +226,17 @@ def test_a_recording_on_the_model_redraws_its_own_bodies_where_the_sensors_saw_t
     from slopewalk.planner.gait import GaitParams
     from slopewalk.planner.plan import plan_walk
 
-    out = {k: tmp_path / f"t.{k}" for k in ("json", "npz", "rrd")}
+    av = pytest.importorskip("av")
+    out = {k: tmp_path / f"t.{k}" for k in ("json", "npz", "rrd", "mp4")}
     argv = ["trial", "--model", WALKER, "--map", MAP, *CELL, "--out", out["json"]]
-    code, err = _run([*argv, "--series", out["npz"], "--record", out["rrd"]], capsys)
+    argv += ["--series", out["npz"], "--record", out["rrd"], "--video", out["mp4"]]
+    code, err = _run([*argv, "--video-fps", "4", "--video-size", "96x64"], capsys)
     assert code == 0, err
     assert out["rrd"].stat().st_size > 0
+    with av.open(str(out["mp4"])) as video:  # 0.5 s settling + 1.4 s walk at 4 frames/s
+        frames = [f.to_ndarray(format="rgb24") for f in video.decode(video=0)]
+    assert len(frames) == 8 and frames[0].shape == (64, 96, 3)
+    assert not np.array_equal(frames[0], frames[-1])  # the model moves (and falls)
     sim = simulated_rows(dict(np.load(out["npz"])))
     scene = model_scene(WALKER, MAP)
     plan = plan_walk(scene.spec, GaitParams.nominal(scene.spec, 1.0, steps=1))
