@@ -134,13 +134,21 @@ def _robot_parser(sub) -> None:
     cmp.set_defaults(run=commands.robot_compare)
 
 
-def _model_flags(p) -> None:
+def _model_flags(p, batch: str = "") -> None:
+    """``--model`` and ``--map``: of ``trial``, or of a batch command (``batch``: what it
+    plays, "trial" or "gait"), whose file's ``robot`` key then names the spec."""
+    spec = (
+        "--robot: its spec from `slopewalk robot import`, default: imported now"
+        if not batch
+        else "the file's robot key: its spec from `slopewalk robot import`, default: imported "
+        "now; replaces the file's model and map keys"
+    )
     p.add_argument(
         "--model",
         metavar="MODEL",
-        help="play the plan on this unmodified MJCF/URDF robot instead of the spec's twin "
-        "(open loop, servo or servo_ff; --robot: its spec from `slopewalk robot import`, "
-        "default: imported now; docs/importing-robots.md)",
+        help=f"play {'every ' + batch if batch else 'the plan'} on this unmodified MJCF/URDF "
+        f"robot instead of the spec's twin (open loop, servo or servo_ff; {spec}; "
+        "docs/importing-robots.md)",
     )
     p.add_argument("--map", metavar="MAP.toml", help="--model's map file (only with --model)")
 
@@ -337,6 +345,7 @@ def _sweep_parser(sub) -> None:
         "slopewalk sweep --resume          # finish a killed 'slopewalk sweep'",
         "slopewalk sweep my_sweep.toml --out runs/slopes --workers 4 --record",
         "slopewalk sweep my_sweep.toml --cluster tcp://scheduler:8786 --report",
+        "slopewalk sweep walker.toml --model walker.xml --map walker-map.toml --out runs/walker",
     )
     p.add_argument(
         "config",
@@ -352,6 +361,7 @@ def _sweep_parser(sub) -> None:
         "sweep.csv) as done and play the rest",
         record_help="also write DIR/recordings/<trial_id>.rrd per trial (rerun)",
     )
+    _model_flags(p, "trial")
     p.add_argument(
         "--report",
         action="store_true",
@@ -469,6 +479,7 @@ def _envelope_parser(sub) -> None:
         "slopewalk envelope --resume            # finish a killed 'slopewalk envelope'",
         "slopewalk envelope my.toml --out runs/env --workers 4 --record",
         "slopewalk envelope --convergence       # also re-search 10 % of the cells at 4x budget",
+        "slopewalk envelope w.toml --model walker.xml --map walker-map.toml --out runs/walker",
     )
     p.add_argument(
         "config",
@@ -485,6 +496,7 @@ def _envelope_parser(sub) -> None:
         record_help="also write DIR/recordings/<cell_id>.rrd per cell (the max-margin gait, "
         "first mode)",
     )
+    _model_flags(p, "gait")
     p.add_argument(
         "--convergence",
         action="store_true",

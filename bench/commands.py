@@ -183,6 +183,7 @@ def trial(args: argparse.Namespace) -> None:
         _named_npz(args.series, "--series")
     _check_noise_flags(args)
     _check_media_flags(args)
+    _check_model_flags(args)
     if args.video is not None:
         render_video = _video_renderer(args)
     if args.record is not None:
@@ -204,7 +205,10 @@ def trial(args: argparse.Namespace) -> None:
     result = run_trial(spec, trial, plan=plan, scene=scene)
     scalars = result.scalars()
     if scene is not None:  # marked with the model it was played on
-        scalars["model"] = {"name": scene.name, "path": str(args.model), "map": args.map}
+        from slopewalk.bench.robot_import.model_file import contents_digest
+
+        scalars["model"] = {"name": scene.name, "path": str(args.model), "map": args.map,
+                            "sha256": contents_digest(args.model, args.map)}  # fmt: skip
     with atomic_paths(*outputs.values()) as tmps:
         tmp = dict(zip(outputs, tmps, strict=True))
         tmp["--out"].write_text(json.dumps(scalars, indent=2, allow_nan=False) + "\n")
@@ -212,11 +216,12 @@ def trial(args: argparse.Namespace) -> None:
             with open(tmp["--series"], "wb") as f:
                 np.savez_compressed(f, **result.series)
         if "--video" in tmp:
-            render_video(tmp["--video"], plan, result)
+            render_video(tmp["--video"], plan, result, scene=scene)
         if "--record" in tmp:
             record_trial(
-                tmp["--record"], plan, result, plot_rate=args.record_rate, video=tmp.get("--video")
-            )
+                tmp["--record"], plan, result, plot_rate=args.record_rate,
+                video=tmp.get("--video"), scene=scene,
+            )  # fmt: skip
     print("\n".join(result.summary_lines()))
     print("wrote " + ", ".join(str(p) for p in outputs.values()))
 
@@ -225,21 +230,27 @@ def _trial_robot(args: argparse.Namespace, load_spec):
     """(spec, scene) of ``trial``: the twin of ``--robot`` (scene None), or ``--model``'s
     scene (``robot_import.scene.model_scene``; the spec ``--robot``'s or imported now)."""
     if args.model is None:
-        if args.map is not None:
-            raise SlopewalkError(f"--map {args.map!r}: only with --model, which is not given")
         return load_spec(args.robot), None
-    for flag, given in (("--controller", args.controller), ("--record", args.record),
-                        ("--video", args.video)):  # fmt: skip
-        if given is not None:
-            raise SlopewalkError(
-                f"{flag} with --model: not yet (a model plays open loop, recorded as "
-                "--out and --series)"
-            )
     from slopewalk.bench.robot_import.scene import model_scene
 
     spec = load_spec(args.robot) if args.robot is not None else None
     scene = model_scene(args.model, args.map, spec)
     return scene.spec, scene
+
+
+def _check_model_flags(args: argparse.Namespace) -> None:
+    """``--map`` needs ``--model``; what a trial on a model cannot do yet, refused before any
+    work (a model plays the plan open loop, its own bodies recorded by ``--record``)."""
+    if args.model is None:
+        if args.map is not None:
+            raise SlopewalkError(f"--map {args.map!r}: only with --model, which is not given")
+        return
+    if args.controller is not None:
+        raise SlopewalkError(
+            "--controller with --model: not yet (the closed loop steps the twin's scene "
+            "only); a model plays the plan open loop, written as --out, --series, --record "
+            "and --video"
+        )
 
 
 def _check_media_flags(args: argparse.Namespace) -> None:
@@ -441,7 +452,9 @@ def sweep(args: argparse.Namespace) -> None:
     from slopewalk.bench.experiments.sweep.config import SweepError, load_sweep
     from slopewalk.bench.experiments.sweep.run import run_sweep
 
-    config = load_sweep(args.config)  # the whole file is checked before anything runs
+    model = _batch_model(args, SweepError)
+    config = load_sweep(args.config, model=model)  # the whole file is checked before anything runs
+    _batch_on_model(args, config.model, SweepError)
     out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
     with _batch_executor(args) as executor:
         summary = run_sweep(
@@ -459,6 +472,31 @@ def sweep(args: argparse.Namespace) -> None:
     if args.config is None or args.report:
         envelope = out / "envelope" / "envelope.csv"
         _write_claims(out, summary.table, envelope if envelope.exists() else None, config)
+
+
+def _batch_model(args: argparse.Namespace, error: type[SlopewalkError]):
+    """``--model`` (with ``--map``) of ``sweep`` and ``envelope`` as a ``ModelFile``: its
+    paths made absolute and its files' digest taken, for every job and worker; None."""
+    from slopewalk.bench.robot_import.mapfile import RobotImportError
+    from slopewalk.bench.robot_import.model_file import ModelFile
+
+    if args.model is None:
+        if args.map is not None:
+            raise error(f"--map {args.map!r}: only with --model, which is not given")
+        return None
+    try:
+        return ModelFile.of(args.model, args.map)
+    except RobotImportError as err:
+        raise error(f"--model: {err}") from None
+
+
+def _batch_on_model(args: argparse.Namespace, model, error: type[SlopewalkError]) -> None:
+    """Refuse what a run on a model (``--model`` or the file's ``model`` key) cannot do."""
+    if model is None:
+        return
+    if args.report:
+        raise error(f"--report with a model ({model.name}): the claims and figures are the "
+                    "paper's biped's")  # fmt: skip
 
 
 def _batch_start(args: argparse.Namespace, default_out, error: type[SlopewalkError]):
@@ -559,6 +597,11 @@ def controllers(args: argparse.Namespace) -> None:
         raise ControllerError("--min-step-time: only with --envelope")
     envelope = _envelope_gaits(args) if args.envelope else None  # checked before any trial
     config = load_sweep(args.config)
+    if config.model is not None:
+        raise ControllerError(
+            f"{config.source}: names the model {config.model.name}: the controllers step the "
+            "twin's scene only (a model plays the plan open loop); give a sweep file without model"
+        )
     if config.noisy:
         raise ControllerError(
             f"{config.source}: command_noise = {config.command_noise_deg:g} deg: the "
@@ -601,6 +644,11 @@ def _envelope_gaits(args: argparse.Namespace):
         from slopewalk.bench.experiments.envelope.config import load_envelope
 
         config = load_envelope(path)
+        if config.model is not None:
+            raise ec.EnvelopeTableError(
+                f"--envelope {args.envelope}: names the model {config.model.name}: the "
+                "controllers step the twin's scene only (a model plays the plan open loop)"
+            )
         return lambda: ec.config_jobs(config, workers=args.workers, min_step_time=low)
     jobs = ec.table_jobs(path, min_step_time=low)
     if not jobs:
@@ -619,7 +667,9 @@ def envelope(args: argparse.Namespace) -> None:
     )
     from slopewalk.bench.report.envelope_claims import write_envelope_documents
 
-    config = load_envelope(args.config)  # the whole file is checked before anything runs
+    model = _batch_model(args, EnvelopeError)
+    config = load_envelope(args.config, model=model)  # checked whole before anything runs
+    _batch_on_model(args, config.model, EnvelopeError)
     out, resume = _batch_start(args, Path.cwd() / "results" / "envelope", EnvelopeError)
     progress = sys.stderr.isatty()
     with _batch_executor(args) as executor:

@@ -175,6 +175,18 @@ STEPS: tuple[Step, ...] = (
         0.2,
     ),  # fmt: skip
     _step("slopewalk cop-error --out results/cop_error.md", ("results/cop_error.md",), 1),
+    # an imported model (issue 23): walker.xml's files name it and its map themselves
+    _step(
+        "slopewalk sweep tests/robots/walker-sweep.toml --out results/robots/walker --workers 2",
+        ("results/robots/walker/sweep.csv",),
+        0.5,
+    ),
+    _step(
+        "slopewalk envelope tests/robots/walker-envelope.toml --out results/robots/walker/envelope "
+        "--workers 2",
+        (f"results/robots/walker/envelope/{n}" for n in _ENVELOPE[:3]),
+        0.5,
+    ),
     _step(
         "slopewalk compare --write-baseline --out results/compare.md",
         ("results/compare_baseline.json", "results/compare.md"),

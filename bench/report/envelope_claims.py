@@ -19,6 +19,8 @@ from slopewalk.bench.sim.model import ACTUATOR_MODES
 from slopewalk.bench.tables.envelope import is_failure, walk_column, walks
 from slopewalk.bench.tables.table import read_table
 
+DEFAULT_ROBOT = "default"  # an envelope table's ``robot`` for the paper's biped
+
 NOMINAL_STEP_TIME = 1.0  # [s]
 
 
@@ -228,17 +230,18 @@ def envelope_cell_note(rows, slope_deg: float, cite: str) -> str:
     )
 
 
-def _of_family(rows, family: str) -> list[dict]:
+def _of_family(rows, family: str, robot: str = DEFAULT_ROBOT) -> list[dict]:
     return [
         r
         for r in rows
-        if r["family"] == family and r["friction"] == 1.0 and r["robot"] == "default"
+        if r["family"] == family and r["friction"] == 1.0 and r["robot"] == robot
         if not is_failure(r["error"])
     ]
 
 
-def family_boundaries(rows) -> dict[str, dict]:
-    """The envelope's boundaries per gait family (μ 1, the default robot), as claims 1-2 read them.
+def family_boundaries(rows, robot: str = DEFAULT_ROBOT) -> dict[str, dict]:
+    """The envelope's boundaries per gait family (μ 1, ``robot``: the default one), as claims
+    1-2 read them.
 
     Per family: ``flat_inside`` the fastest flat step time [s] with a gait inside (None:
     none), ``flat_walked`` {mode: the fastest flat step time MuJoCo walks}, ``up_inside``
@@ -249,7 +252,7 @@ def family_boundaries(rows) -> dict[str, dict]:
     out = {}
     families = sorted({r["family"] for r in rows}, key=lambda f: (f != "paper", f))
     for family in families:
-        sub = _of_family(rows, family)
+        sub = _of_family(rows, family, robot)
         modes = _modes(sub)
         flat = [r for r in sub if r["slope_deg"] == 0.0]
         line = [r for r in sub if r["step_time"] == NOMINAL_STEP_TIME]
@@ -315,7 +318,7 @@ def _intervals_text(runs: list[tuple[float, float]], unit: str) -> str:
     return ", ".join(f"{a:g}{unit}" if a == b else f"{a:g}{unit} to {b:g}{unit}" for a, b in runs)
 
 
-def _walked_interval_lines(rows) -> list[str]:
+def _walked_interval_lines(rows, robot: str = DEFAULT_ROBOT) -> list[str]:
     """Per family and mode: every slope walked at t_c = 1 s and every flat step time walked,
     as intervals of the grid, since the steepest or fastest alone hides the gaps below it."""
     lines = [
@@ -329,7 +332,7 @@ def _walked_interval_lines(rows) -> list[str]:
     ]
     families = sorted({r["family"] for r in rows}, key=lambda f: (f != "paper", f))
     for family in families:
-        sub = _of_family(rows, family)
+        sub = _of_family(rows, family, robot)
         line = [r for r in sub if r["step_time"] == NOMINAL_STEP_TIME]
         flat = [r for r in sub if r["slope_deg"] == 0.0]
         for mode in _modes(sub):
@@ -342,9 +345,11 @@ def _walked_interval_lines(rows) -> list[str]:
 
 
 def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> str:
-    """``boundaries.md``: ``family_boundaries`` as a table, one row per family, the GA's
-    admissibility constraints that shape them, and their bands over the spec's unknowns
-    (``bands``: the rows of a ``bands.csv``, ``report.bands``; None: where to find them)."""
+    """``boundaries.md``: ``family_boundaries`` as a table, one row per family: of the
+    default robot, or of the table's one robot where it has no other (an imported spec,
+    its model named where the table's rows were played on one); the GA's admissibility
+    constraints that shape them, and their bands over the spec's unknowns (``bands``: the
+    rows of a ``bands.csv``, ``report.bands``; None: where to find them)."""
 
     def show(value, unit, edge=None):
         text = "none" if value is None else f"{value:g}{unit}"
@@ -353,11 +358,16 @@ def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> s
     def per_mode(values, unit, edge):
         return ", ".join(f"{m} {show(v, unit, edge)}" for m, v in values.items()) or "not played"
 
+    robots = {r["robot"] for r in rows}
+    robot = robots.pop() if len(robots) == 1 else DEFAULT_ROBOT
+    whose = "the default robot" if robot == DEFAULT_ROBOT else f"the robot `{robot}`"
+    models = {(r["model"], r["model_digest"]) for r in rows if r.get("model")}
+    whose += "".join(f", played on the unmodified model {m} ({d})" for m, d in sorted(models))
     lines = [
         "# The envelope's boundaries per gait family",
         "",
-        f"Written by `slopewalk envelope` with the table ({source}): per family, μ = 1, the "
-        "default robot. *Inside*: the GA's max-margin gait has its ZMP inside the support "
+        f"Written by `slopewalk envelope` with the table ({source}): per family, μ = 1, "
+        f"{whose}. *Inside*: the GA's max-margin gait has its ZMP inside the support "
         "polygon at every instant with every joint within its limits; *walked*: MuJoCo plays "
         "that gait to the end and walks the plan (strict walk verdict `walked`: balanced, "
         "every landing on its footprint, the swing foot off the plane, the pelvis at the end "
@@ -370,7 +380,7 @@ def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> s
         "uphill inside | downhill inside | uphill walked | downhill walked |",
         "|---|---|---|---|---|---|---|",
     ]
-    for family, b in family_boundaries(rows).items():
+    for family, b in family_boundaries(rows, robot).items():
         e = b["edges"]
         lines.append(
             f"| {family} | {show(b['flat_inside'], ' s', e['flat'])} | "
@@ -384,7 +394,7 @@ def boundaries_markdown(rows, source: str, bands: list[dict] | None = None) -> s
         "*(grid edge)*: the boundary lies at or beyond the grid's last step time or slope.",
         "",
         *_shaping_lines(bands),
-        *_walked_interval_lines(rows),
+        *_walked_interval_lines(rows, robot),
     ]
     return "\n".join(lines) + "\n"
 

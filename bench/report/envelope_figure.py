@@ -99,9 +99,10 @@ def envelope_figure(rows: list[dict]):
         times, slopes, _ = grids(sub, families[0])
         main = fig.add_subplot(grid[2 * p : 2 * p + 2, 0])
         image = _margin_panel(main, sub, families, handles)
+        model = "".join(sorted({f", played on model {r['model']}" for r in sub if r.get("model")}))
         main.set_title(
-            f"Is there a gait with the ZMP inside? (μ = {mu:g}, robot {robot})\ncolour: largest "
-            f"minimum ZMP margin the GA found, {families[0]} family",
+            f"Is there a gait with the ZMP inside? (μ = {mu:g}, robot {robot}{model})\n"
+            f"colour: largest minimum ZMP margin the GA found, {families[0]} family",
             fontsize=9,
         )
         bar = fig.colorbar(image, ax=main, shrink=0.7, extend="both", location="left")
@@ -114,10 +115,11 @@ def envelope_figure(rows: list[dict]):
             ax.set_title(f"Does MuJoCo walk that gait? {mode}", fontsize=9)
             _grid_axes(ax, times, slopes, False)
             _paper_points(ax, times, slopes, handles)
-    fig.legend(
-        list(handles.values()), list(handles), loc="outside lower center",
-        ncol=min(3, len(handles)), fontsize=8, frameon=False,
-    )  # fmt: skip
+    if handles:  # none where no gait was found (nothing played) and no contour drawn
+        fig.legend(
+            list(handles.values()), list(handles), loc="outside lower center",
+            ncol=min(3, len(handles)), fontsize=8, frameon=False,
+        )  # fmt: skip
     return fig
 
 

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from slopewalk.bench.actuators import ACTUATOR_MODES
 from slopewalk.bench.robot_import.fit import BaseFrame, Fit, fit_model, posed
 from slopewalk.bench.robot_import.mapfile import SIDES, load_map
 from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
@@ -86,13 +87,26 @@ class ModelScene:
             for kind in JOINT_LIMIT_KEYS
         ]
 
+    @property
+    def base_name(self) -> str:
+        """The name of the model's base body (the spec's pelvis)."""
+        return self.fit.model.body(self.fit.base).name
+
     def build(self, plan, *, friction: float, actuators: str, timestep: float) -> mujoco.MjModel:
         """The model on the plan's tilted plane with the trial's sensors (module doc)."""
-        servo = servo_settings(self.spec, actuators)
-        if servo.kp != self.spec.stiffness:
+        mjs = self.editable(plan, friction=friction, actuators=actuators, timestep=timestep)
+        try:
+            return mjs.compile()
+        except ValueError as err:
+            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+
+    def editable(self, plan, *, friction: float, actuators: str, timestep: float) -> mujoco.MjSpec:
+        """``build``'s scene before it is compiled, for a caller that adds to it (a video's
+        camera)."""
+        if actuators not in model_modes(self.spec):
             raise SceneError(
                 f"--actuators {actuators}: a model plays on its own actuators (gains "
-                "the spec's [servo]); use servo or servo_ff"
+                f"the spec's [servo]); use {' or '.join(model_modes(self.spec))}"
             )
         mjs = mujoco.MjSpec.from_file(self.fit.path)
         mjs.option.timestep = timestep
@@ -113,10 +127,7 @@ class ModelScene:
         self._add_sites(mjs)
         self._add_sensors(mjs)
         mjs.add_numeric(name=JOINT_SIGN, data=[sign for _, sign in self.joints()])
-        try:
-            return mjs.compile()
-        except ValueError as err:
-            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+        return mjs
 
     def _position_actuated(self, mjs: mujoco.MjSpec) -> set[str]:
         """Joints a position actuator of the model drives (gear 1, kp = the spec's)."""
@@ -316,6 +327,12 @@ class ModelScene:
         state = np.empty(mujoco.mj_stateSize(model, _STATE))
         mujoco.mj_getState(model, data, state, _STATE)
         return state
+
+
+def model_modes(spec: RobotSpec) -> tuple[str, ...]:
+    """The actuator modes (``actuators.ACTUATOR_MODES``) a model plays in: those whose
+    gains are the spec's [servo] table (the model's own actuators), e.g. servo, servo_ff."""
+    return tuple(m for m in ACTUATOR_MODES if servo_settings(spec, m).kp == spec.stiffness)
 
 
 def model_scene(model_path, map_path=None, spec: RobotSpec | None = None) -> ModelScene:

@@ -61,6 +61,9 @@ class Recording:
             order [rad], (m, 8): a feedforward mode's answer to the floor's give and sink
             (``floor_feedforward``); None: the planned angles themselves (also for a
             closed-loop controller, whose own aim is not known here).
+        model_qpos: An imported model's own ``qpos`` after each row, (m, nq), which a
+            recording redraws the model from; None on the twin (its 15 coordinates are
+            the sensors' pelvis pose and joint angles).
     """
 
     t: np.ndarray
@@ -69,6 +72,7 @@ class Recording:
     force_limit: float
     diverged_at: float | None
     aim_offset: np.ndarray | None = None
+    model_qpos: np.ndarray | None = None
 
 
 def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float):
@@ -347,19 +351,37 @@ def play_commands(
     R_ws = rotation_slope_to_world(plans[0].params.slope)
     return [
         recording_from_rollout(
-            model, state[row], sensordata[row], t, q_ref, R_ws, force_limit, aim_offset=aim
-        )
+            model,
+            state[row],
+            sensordata[row],
+            t,
+            q_ref,
+            R_ws,
+            force_limit,
+            aim_offset=aim,
+            model_qpos=None if scene is None else _qpos_sensed(model, states[row], state[row]),
+        )  # fmt: skip
         for row, (q_ref, aim) in enumerate(zip(controls, aims, strict=True))
     ]
 
 
+def _qpos_sensed(model, start: np.ndarray, states: np.ndarray) -> np.ndarray:
+    """``qpos`` (m, nq) as each row's sensors saw it: a rollout's sensor row is computed at
+    the start of its step, before the integration that gives its state row, so the qpos of
+    row k is that of state k − 1 (of ``start``, the full physics state, for k = 0)."""
+    qpos = slice(1, 1 + model.nq)  # mjSTATE_FULLPHYSICS: time, then qpos
+    return np.vstack([start[qpos], states[:-1, qpos]])
+
+
 def recording_from_rollout(
-    model, state, sensordata, t, q_ref, rotation_slope_to_world, force_limit, *, aim_offset=None
-) -> Recording:
+    model, state, sensordata, t, q_ref, rotation_slope_to_world, force_limit, *, aim_offset=None,
+    model_qpos=None,
+) -> Recording:  # fmt: skip
     """A ``Recording`` from one rollout's states (m, nstate) and sensor rows (m, nsensor).
 
     A MuJoCo reset (time running backwards) or a non-finite row cuts the series
-    there and sets ``diverged_at``. ``aim_offset`` (m, 8): ``Recording.aim_offset``.
+    there and sets ``diverged_at``. ``aim_offset`` (m, 8): ``Recording.aim_offset``;
+    ``model_qpos`` (m, nq): ``Recording.model_qpos``.
     """
     clock = state[:, 0]  # time after each step
     reset = np.flatnonzero(np.diff(clock) <= 0)
@@ -377,4 +399,5 @@ def recording_from_rollout(
         force_limit=force_limit,
         diverged_at=float(t[min(cut, t.size - 1)]) if diverged else None,
         aim_offset=None if aim_offset is None else aim_offset[:cut],
+        model_qpos=None if model_qpos is None else model_qpos[:cut],
     )

@@ -13,7 +13,9 @@ Entities:
 * ``world``: z up. ``world/plane``: the tilted plane around the walk (static).
 * ``world/robot/<body>``: each MJCF body's geoms (boxes, capsules, spheres) in
   the body frame, static, under a ``Transform3D`` of the body's world pose per
-  frame, from ``mj_kinematics`` on the simulated ``qpos``.
+  frame, from ``mj_kinematics`` on the simulated ``qpos``; for a trial on an imported
+  model (``scene``), the model's own bodies from its own ``qpos`` (``model_qpos``:
+  held joints as they gave under load), a body without a name as ``body<id>``.
 * ``world/support_polygon``: the planned support polygon, per frame.
 * ``world/zmp_analytic``, ``world/zmp_lipm`` and ``world/cop_simulated``: the moving
   points, and their whole path as a static ``.../trace``.
@@ -91,6 +93,7 @@ def record_trial(
     frame_rate: float = FRAME_RATE,
     plot_rate: float | None = None,
     video: str | Path | None = None,
+    scene=None,
 ) -> Path:
     """Write the rerun recording of one trial to ``path`` (see module doc).
 
@@ -102,6 +105,8 @@ def record_trial(
         plot_rate: Sampling of the plots [Hz], > 0; None: every sample of the series.
         video: An mp4 of the trial (``video.render_trial_video``) to embed, its first
             frame at the first recorded time; None: no video.
+        scene: The imported model's scene the trial was played on
+            (``robot_import.scene.ModelScene``), whose bodies are drawn; None: the twin.
 
     Returns:
         The path written.
@@ -114,9 +119,11 @@ def record_trial(
         raise RecordingError("result.series has no 'qpos': cannot replay the robot in 3D")
     sim = simulated_rows(series)
     trial = result.trial
-    model = build_model(
-        plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep
-    )
+    build = build_model if scene is None else scene.build
+    model = build(plan, friction=trial.friction, actuators=trial.actuators, timestep=trial.timestep)
+    qpos = sim["qpos"] if scene is None else sim.get("model_qpos")
+    if qpos is None:
+        raise RecordingError("result.series has no 'model_qpos': cannot replay the model in 3D")
     R = rotation_slope_to_world(plan.params.slope)  # S → world
     path = Path(path)
     rec = rr.RecordingStream(application_id="slopewalk")
@@ -126,7 +133,7 @@ def record_trial(
             rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
             _log_plane(rec, series, R)
             frames = every(sim["t"], frame_rate)
-            _log_robot(rec, model, sim["qpos"][frames], sim["t"][frames])
+            _log_robot(rec, model, qpos[frames], sim["t"][frames])
             _log_balance(rec, plan, series, sim, R, frame_rate)
             _log_plots(rec, plan, series, sim, plot_rate)
             _log_events(rec, result, float(sim["t"][0]) if sim["t"].size else 0.0)
@@ -225,7 +232,7 @@ def _log_robot(rec: rr.RecordingStream, model, qpos: np.ndarray, t: np.ndarray) 
         mujoco.mj_kinematics(model, data)
         pos[k], quat[k] = data.xpos, data.xquat
     for b in bodies:
-        entity = f"world/robot/{model.body(b).name}"
+        entity = f"world/robot/{model.body(b).name or f'body{b}'}"
         for geoms in _geoms(model, b):
             rec.log(entity, geoms, static=True)
         pose = rr.Transform3D.columns(translation=pos[:, b], quaternion=_xyzw(quat[:, b]))

@@ -9,6 +9,8 @@ and ``qpos`` (n, 15): the simulated MuJoCo ``qpos`` (world frame) for replaying
 the motion, e.g. with ``mj_kinematics``. The settling before the walk (the robot held
 at the first pose, t < 0) has its own rows: ``settling_t`` and ``settling_<name>`` for
 ``qpos``, ``q_simulated``, ``actuator_force``, ``cop``, ``foot_cop`` and ``foot_force``.
+A trial on an imported model (``scene``) also has ``model_qpos`` and
+``settling_model_qpos`` (n, nq): the model's own ``qpos``, which a recording redraws.
 
 ``run_trial(spec, trial)`` returns a ``TrialResult``: both ZMP series on the
 walk's time base, their RMS and max distance over the samples where the robot
@@ -362,7 +364,8 @@ def compare(
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
         **_walk_columns(plan, trial, recording, verdict(events), predicted),
         series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing)
-        | _settling_series(s, t, t < plan.t[0]),
+        | _settling_series(s, t, t < plan.t[0])
+        | _model_series(recording, walk, t < plan.t[0]),
     )
 
 
@@ -371,15 +374,25 @@ SIMULATED_ROWS = ("qpos", "q_simulated", "actuator_force", "cop", "foot_cop", "f
 
 def simulated_rows(series: dict) -> dict:
     """The simulated series of ``TrialResult.series`` over the settling and the walk, in time
-    order: ``t`` and each of ``SIMULATED_ROWS`` (a series without ``settling_*`` entries, as
-    written before they existed, gives its walk rows alone)."""
+    order: ``t``, each of ``SIMULATED_ROWS`` and, for a trial on a model, ``model_qpos`` (a
+    series without ``settling_*`` entries, as written before they existed, gives its walk
+    rows alone)."""
     settling = "settling_t" in series
+    names = ("t", *SIMULATED_ROWS, *(("model_qpos",) if "model_qpos" in series else ()))
     return {
         name: np.concatenate([series[f"settling_{name}"], series[name]])
         if settling
         else np.asarray(series[name])
-        for name in ("t", *SIMULATED_ROWS)
+        for name in names
     }
+
+
+def _model_series(recording: Recording, walk: np.ndarray, settling: np.ndarray) -> dict:
+    """``model_qpos`` and ``settling_model_qpos`` of a trial on an imported model; {}."""
+    qpos = recording.model_qpos
+    if qpos is None:
+        return {}
+    return {"model_qpos": qpos[walk], "settling_model_qpos": qpos[settling]}
 
 
 def _settling_series(s, t: np.ndarray, settling: np.ndarray) -> dict:

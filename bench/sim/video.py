@@ -9,6 +9,8 @@ that scales with the hip height. It moves with the pelvis up or down the slope; 
 plane is drawn tilted. Markers, pins standing on the plane along its normal: the
 analytic ZMP (blue), the LIPM ZMP (purple) and the simulated CoP (orange), where they
 exist. Encoded as H.264 (no B-frames, yuv420p) in an mp4 by PyAV, written atomically.
+A trial on an imported model (``scene``) is rendered from the model's own ``qpos``
+(``model_qpos``), the camera on its base body.
 
 Needs PyAV (``pip install 'slopewalk[video]'``) and an OpenGL backend for offscreen
 rendering: on Linux without a display, ``MUJOCO_GL=egl`` (Mesa's EGL; the ``trial``
@@ -93,6 +95,7 @@ def render_trial_video(
     *,
     fps: float = VIDEO_FPS,
     size: tuple[int, int] = VIDEO_SIZE,
+    scene=None,
 ) -> VideoInfo:
     """Render the trial to an mp4 at ``path`` (see module doc).
 
@@ -102,6 +105,9 @@ def render_trial_video(
         result: The trial's ``TrialResult``, whose series hold ``qpos``.
         fps: Frames per second, > 0.
         size: Frame width and height [px], even (the chroma planes are halves).
+        scene: The imported model's scene the trial was played on
+            (``robot_import.scene.ModelScene``): the model is rendered from its own
+            ``model_qpos``, the camera on its base body; None: the twin.
 
     Returns:
         The ``VideoInfo`` of the file.
@@ -117,7 +123,10 @@ def render_trial_video(
     times = t[0] + np.arange(int(np.floor((t[-1] - t[0]) * fps + 1e-9)) + 1) / fps
     rows = np.clip(np.searchsorted(t, times - 0.5 * np.median(np.diff(t))), 0, t.size - 1)
     markers = _markers(plan, result.series, sim, rows)
-    model = video_model(plan, result, size)
+    model = video_model(plan, result, size, scene)
+    qpos = sim["qpos"] if scene is None else sim.get("model_qpos")
+    if qpos is None:
+        raise VideoError("result.series has no 'model_qpos': cannot replay the model")
     data = mujoco.MjData(model)
     renderer = _renderer(model, size)
     try:
@@ -126,7 +135,7 @@ def render_trial_video(
             stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
             stream.codec_context.options = {"bf": "0"}  # frames in display order
             for k, row in enumerate(rows):
-                data.qpos[:] = sim["qpos"][row]
+                data.qpos[:] = qpos[row]
                 mujoco.mj_forward(model, data)
                 renderer.update_scene(data, camera=CAMERA)
                 for kind, pos, normal in markers[k]:
@@ -139,17 +148,19 @@ def render_trial_video(
     return VideoInfo(Path(path), times, (width, height), fps)
 
 
-def video_model(plan: Plan, result: TrialResult, size: tuple[int, int]) -> mujoco.MjModel:
-    """The trial's scene with ``CAMERA`` on the pelvis and an offscreen buffer of ``size``."""
+def video_model(
+    plan: Plan, result: TrialResult, size: tuple[int, int], scene=None
+) -> mujoco.MjModel:
+    """The trial's scene with ``CAMERA`` on the pelvis (an imported model's base body, for
+    its ``scene``) and an offscreen buffer of ``size``."""
     trial = result.trial
-    xml = scene_xml(
-        plan.spec,
-        slope=plan.params.slope,
-        friction=trial.friction,
-        actuators=trial.actuators,
-        timestep=trial.timestep,
-    )
-    mjs = mujoco.MjSpec.from_string(xml)
+    mu, mode, dt = trial.friction, trial.actuators, trial.timestep
+    if scene is None:
+        slope = plan.params.slope
+        xml = scene_xml(plan.spec, slope=slope, friction=mu, actuators=mode, timestep=dt)
+        mjs = mujoco.MjSpec.from_string(xml)
+    else:
+        mjs = scene.editable(plan, friction=mu, actuators=mode, timestep=dt)
     mjs.visual.global_.offwidth = max(mjs.visual.global_.offwidth, size[0])
     mjs.visual.global_.offheight = max(mjs.visual.global_.offheight, size[1])
     R_ws = rotation_slope_to_world(plan.params.slope)
@@ -160,7 +171,7 @@ def video_model(plan: Plan, result: TrialResult, size: tuple[int, int]) -> mujoc
     x = np.cross(look, [0.0, 0.0, 1.0])
     x /= np.linalg.norm(x)
     camera = np.column_stack([x, np.cross(z, x), z])  # its axes in the world
-    pelvis = mjs.body(PELVIS)
+    pelvis = mjs.body(PELVIS if scene is None else scene.base_name)
     flat = np.empty(9)
     mujoco.mju_quat2Mat(flat, np.asarray(pelvis.quat, float))  # at qpos0
     body = flat.reshape(3, 3)

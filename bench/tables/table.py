@@ -35,7 +35,7 @@ import math
 import os
 from collections import Counter
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from slopewalk.bench.files import atomic_path
@@ -334,6 +334,20 @@ def read_table(path: str | Path) -> list[dict]:
             typed["mass_scale"] = "" if row["mass_scale"] == "none" else row["mass_scale"]
         out.append(typed)
     return out
+
+
+MODEL_COLUMNS = ("model", "model_digest")  # a run on an imported model: its name, its files'
+
+
+def model_format(fmt: TableFormat) -> TableFormat:
+    """``fmt`` of a run on an imported model (``sweep``/``envelope --model``): the model's
+    columns after every other (``MODEL_COLUMNS``: its name and ``sha256:`` with the first
+    digits of its files' digest), so each column of ``fmt`` keeps its place; the table of
+    the same run on the twin is refused as such."""
+    why = "its rows were played on the spec's twin, not on a model"
+    return replace(
+        fmt, columns=(*fmt.columns, *MODEL_COLUMNS), siblings=((fmt.columns, why), *fmt.siblings)
+    )
 
 
 _KINDS = {"trial_id": "sweep", "cell_id": "envelope"}  # a table's id column -> what wrote it

@@ -20,6 +20,7 @@ import pytest
 from slopewalk.bench.batch import cluster as cluster_module
 from slopewalk.bench.batch.executor import ExecutorError
 from slopewalk.bench.cli import main
+from slopewalk.bench.robot_import.model_file import contents_digest
 
 distributed = pytest.importorskip("distributed")
 pytestmark = pytest.mark.slow  # about 40 s on the 2-core machine; .ci/run runs them
@@ -110,6 +111,25 @@ def test_a_relative_out_records_where_the_client_looks_and_resumes(
     out = capsys.readouterr().out
     assert "2 trials: 1 run, 1 already done, 0 errors, 0 lost" in out
     assert recordings[0].exists()
+
+
+def test_a_relative_model_reaches_the_workers_absolute_and_checked(
+    dask_cluster, tmp_path, monkeypatch
+):
+    """``--model`` relative to the client's folder: the workers, in their own folder, play
+    it (its absolute path and digest travel with each trial), every row marked with it."""
+    address, _, _ = dask_cluster
+    robots = Path(__file__).parents[1] / "robots"
+    for name in ("walker.xml", "walker-map.toml"):
+        (tmp_path / name).write_bytes((robots / name).read_bytes())
+    monkeypatch.chdir(tmp_path)
+    config = _sweep_file(tmp_path, "steps = 1\n[grid]\nstep_time = [1.0]\nslope = [0, 6]\n")
+    flags = ["--cluster", address, "--out", "walker", "--model", "walker.xml"]
+    assert main(["sweep", str(config), *flags, "--map", "walker-map.toml"]) == 0
+    lines = (tmp_path / "walker" / "sweep.csv").read_text().splitlines()
+    assert lines[0].endswith(",error,model,model_digest") and len(lines) == 3
+    digest = contents_digest(robots / "walker.xml", robots / "walker-map.toml")[:16]
+    assert all(line.endswith(f",,walker,sha256:{digest}") for line in lines[1:]), lines
 
 
 def test_the_window_follows_the_workers_threads_not_this_machines_cores(dask_cluster, monkeypatch):

@@ -49,7 +49,8 @@ from pathlib import Path
 import numpy as np
 
 from slopewalk.bench.batch.executor import one_line
-from slopewalk.bench.experiments.sweep.trials import TIMESTEP, spec_text
+from slopewalk.bench.experiments.sweep.trials import TIMESTEP, model_inputs, spec_text
+from slopewalk.bench.robot_import.model_file import ModelFile
 from slopewalk.bench.tables.envelope import (
     GAITS,
     REPLAN_NOTE,
@@ -90,6 +91,8 @@ class EnvelopeCell:
         controllers: ``MODULE:CALLABLE`` of the controllers each played gait is also
             walked with (part of the id only when there are some: open-loop ids stay).
         threads: numba threads of the cell's GA (not part of the id).
+        model: The unmodified model each gait is played on (``envelope --model``), ``spec``
+            its imported spec; None: the spec's twin. Part of the id only when set.
     """
 
     step_time: float
@@ -104,6 +107,7 @@ class EnvelopeCell:
     spec_json: str = field(default="", repr=False, compare=False)
     controllers: tuple[str, ...] = ()
     threads: int = field(default=1, compare=False)
+    model: ModelFile | None = None
 
     @property
     def cell_id(self) -> str:
@@ -122,6 +126,8 @@ class EnvelopeCell:
         }
         if self.controllers:  # only then: the open-loop ids stay what they were
             key["controllers"] = list(self.controllers)
+        if self.model is not None:  # likewise: the twin's ids stay; the files' digest
+            key["model"] = self.model.digest
         return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
     @property
@@ -129,7 +135,8 @@ class EnvelopeCell:
         text = f"T={self.step_time:g} s slope={self.slope_deg:g} mu={self.friction:g}"
         if self.family != "paper":
             text += f" {self.family}"
-        return text + (f" robot {self.robot}" if self.robot != "default" else "")
+        text += f" robot {self.robot}" if self.robot != "default" else ""
+        return text + (f" model {self.model.name}" if self.model is not None else "")
 
     @property
     def slope(self) -> float:
@@ -148,7 +155,7 @@ class EnvelopeCell:
             "generations": self.search.generations,
             "seed": self.search.seed,
             "required_margin_mm": self.search.required_margin * 1e3,
-        }
+        } | model_inputs(self.model)
 
     def problem(self):
         """The GA's problem of this cell's family (``planner.gait_search.GaitProblem``)."""
@@ -410,6 +417,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
     from slopewalk.bench.sim.trial_spec import TrialSpec
 
     out = {}
+    scene = None if cell.model is None else cell.model.scene(cell.spec)  # checked, fitted once
     for i, mode in enumerate(cell.modes):
         for controller in (None, *cell.controllers):
             trial = TrialSpec(
@@ -419,7 +427,8 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
                 timestep=TIMESTEP,
                 controller=controller,
             )
-            result = run_trial(cell.spec, trial, plan=plan, predict=False)  # simulated columns
+            # the simulated columns only
+            result = run_trial(cell.spec, trial, plan=plan, predict=False, scene=scene)
             tag = controller_tag(controller) if controller else ""
             verdict, rms = sim_columns(gait, mode, tag)
             out |= {
@@ -432,7 +441,7 @@ def _play(cell: EnvelopeCell, gait: str, plan, record_dir: str | None) -> dict:
 
                 name = f"{cell.cell_id}_{tag}" if tag else cell.cell_id
                 try:
-                    _record(Path(record_dir), name, plan, result)
+                    _record(Path(record_dir), name, plan, result, scene)
                 except Exception as err:  # the cell stands; a re-run with --record retries
                     out["error"] = f"recording failed: {one_line(err)}"
     return out

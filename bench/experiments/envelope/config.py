@@ -33,6 +33,12 @@ in every mode, by each of them, into columns of their own (``envelope/cell.py``)
 A controller that does not import, or two whose callables share a name (they
 name the columns), is refused before any cell runs.
 
+``model`` and ``map`` (paths relative to the file; ``envelope --model MODEL --map MAP``
+replaces both) play every found gait on that unmodified MJCF/URDF model: ``robot``
+then defaults to ``["imported"]`` (the spec imported from it now), ``actuators`` to
+the modes a model plays in (``robot_import.scene.model_modes``); the paper's robot
+and controllers are refused; the model's digest enters every ``cell_id``.
+
 Every key is checked: an unknown key, a value of the wrong type or out of its
 range is refused in one line naming the key, the value and the range (the
 sweep file's rules, ``sweep/config.py``, whose helpers this module uses).
@@ -48,9 +54,18 @@ import numpy as np
 
 from slopewalk.bench.actuators import ACTUATOR_MODES, actuator_mode
 from slopewalk.bench.experiments.envelope.cell import FAMILIES, EnvelopeCell, SearchSettings
-from slopewalk.bench.experiments.sweep.config import SweepError, _body, _controller, _known, _number
+from slopewalk.bench.experiments.sweep.config import (
+    IMPORTED,
+    SweepError,
+    _body,
+    _controller,
+    _known,
+    _number,
+    file_model,
+)
 from slopewalk.bench.files import in_package
 from slopewalk.bench.flags import GENERATIONS, POPULATION, SEED
+from slopewalk.bench.robot_import.model_file import ModelFile
 from slopewalk.bench.tables.envelope import envelope_format
 from slopewalk.planner import ranges
 from slopewalk.planner.config_file import load_toml
@@ -59,7 +74,7 @@ from slopewalk.planner.gait import GaitParams
 
 ENVELOPES_DIR = Path(__file__).parents[1] / "envelopes"  # bench/experiments/envelopes/
 DEFAULT_ENVELOPE = ENVELOPES_DIR / "paper.toml"
-TOP_KEYS = ("description", "steps", "grid", "search")
+TOP_KEYS = ("description", "steps", "model", "map", "grid", "search")
 GRID_KEYS = ("step_time", "slope", "friction", "robot", "actuators", "controller")
 SEARCH_KEYS = ("population", "generations", "seed", "family", "required_margin")
 SEARCH_DEFAULTS = {
@@ -99,10 +114,14 @@ class EnvelopeConfig:
     modes: tuple[str, ...]
     description: str = ""
     controllers: tuple[str, ...] = ()
+    model: ModelFile | None = None  # every gait played on this model (``envelope --model``)
 
 
-def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
-    """Read and check an envelope file (default: ``bench/experiments/envelopes/paper.toml``).
+def load_envelope(
+    path: str | Path | None = None, *, model: ModelFile | None = None
+) -> EnvelopeConfig:
+    """Read and check an envelope file (default: ``bench/experiments/envelopes/paper.toml``);
+    ``model`` (``--model``) replaces the file's ``model`` and ``map`` keys.
 
     Raises:
         EnvelopeError: unreadable file, unknown key, value out of range or missing
@@ -114,21 +133,26 @@ def load_envelope(path: str | Path | None = None) -> EnvelopeConfig:
     data = load_toml(path, where=where, kind="an envelope TOML", error=EnvelopeError)
     # the source as the reports quote it: as given, or the default's path in the package
     source = str(given) if given is not None else in_package(DEFAULT_ENVELOPE)
-    return envelope_from_dict(data, base_dir=path.parent, source=source)
+    return envelope_from_dict(data, base_dir=path.parent, source=source, model=model)
 
 
-def envelope_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> EnvelopeConfig:
-    """Build an EnvelopeConfig from parsed TOML; robot paths are relative to ``base_dir``."""
+def envelope_from_dict(
+    data: dict, *, base_dir: Path, source: str = "<dict>", model: ModelFile | None = None
+) -> EnvelopeConfig:
+    """Build an EnvelopeConfig from parsed TOML; robot, model and map paths are relative to
+    ``base_dir``; ``model`` replaces the file's ``model`` and ``map`` (module doc)."""
     try:
-        return _parse(data, base_dir, source)
+        return _parse(data, base_dir, source, model)
     except EnvelopeError:
         raise
     except SweepError as err:  # a helper of the sweep file's: the same message, our class
         raise EnvelopeError(str(err)) from None
 
 
-def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
+# long: an envelope file's keys, one check after the other
+def _parse(data: dict, base_dir: Path, source: str, model: ModelFile | None) -> EnvelopeConfig:
     _known(data, TOP_KEYS, "", source)
+    model = model or file_model(data, base_dir, source, EnvelopeError)
     description = data.get("description", "")
     if not isinstance(description, str):
         raise EnvelopeError(f"{source}: description = {description!r}: must be a string")
@@ -151,9 +175,26 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
         _checked(v, "grid.friction", ranges.FRICTION, source)
         for v in _list(grid, "friction", [1.0], source)
     )
-    given_modes = _list(grid, "actuators", list(ACTUATOR_MODES), source)
+    robots: dict = {} if model is None else {IMPORTED: model.scene().spec}
+    given_robots = _list(grid, "robot", ["default" if model is None else IMPORTED], source)
+    if model is not None and "default" in given_robots:
+        raise EnvelopeError(
+            f"{where}.robot = 'default' with a model: the paper's biped is not the model; "
+            f"leave robot out (the spec imported from {model.name} now) or name a spec of "
+            "'slopewalk robot import'"
+        )
+    bodies = [_body(r, (), robots, base_dir, where) for r in given_robots]
+    bodies = list({b.spec_json: b for b in reversed(bodies)}.values())[::-1]  # first kept
+    playable = ACTUATOR_MODES if model is None else _model_modes(bodies)
+    given_modes = _list(grid, "actuators", list(playable), source)
     for mode in given_modes:
         actuator_mode(mode, EnvelopeError, f"{where}.actuators =")
+    for mode in given_modes:
+        if mode not in playable:
+            raise EnvelopeError(
+                f"{where}.actuators = {mode!r} with a model: it plays on its own actuators "
+                f"(gains the spec's [servo]); use {' or '.join(playable)}"
+            )
     modes = _unique(given_modes)
     if len(modes) < len(given_modes):
         twice = sorted({m for m in given_modes if given_modes.count(m) > 1})
@@ -166,15 +207,15 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
         for c in _unique(_controller(v, where) for v in _list(grid, "controller", [], source))
         if c is not None  # "none": open loop, played anyway
     )
+    if controllers and model is not None:
+        raise EnvelopeError(
+            f"{where}.controller = {controllers[0]!r} with a model: a model plays the plan "
+            "open loop"
+        )
     try:
         envelope_format(controllers)
     except ValueError as err:
         raise EnvelopeError(f"{where}.controller: {err}") from None
-    robots: dict = {}
-    bodies = [
-        _body(r, (), robots, base_dir, where) for r in _list(grid, "robot", ["default"], source)
-    ]
-    bodies = list({b.spec_json: b for b in reversed(bodies)}.values())[::-1]  # first kept
 
     settings = _search(search, source)
     _check_margin_unit(settings.required_margin, bodies, source)
@@ -197,14 +238,22 @@ def _parse(data: dict, base_dir: Path, source: str) -> EnvelopeConfig:
             spec=body.spec,
             spec_json=body.spec_json,
             controllers=controllers,
+            model=model,
         )
         for t, s, mu, body, family in itertools.product(
             step_times, slopes, frictions, bodies, settings.families
         )
     )
     return EnvelopeConfig(
-        source, cells, step_times, slopes, settings, modes, description, controllers
+        source, cells, step_times, slopes, settings, modes, description, controllers, model
     )
+
+
+def _model_modes(bodies) -> tuple[str, ...]:
+    """The actuator modes every robot of the grid plays the model in (``model_modes``)."""
+    from slopewalk.bench.robot_import.scene import model_modes
+
+    return tuple(m for m in ACTUATOR_MODES if all(m in model_modes(b.spec) for b in bodies))
 
 
 def _search(table: dict, source: str) -> SearchSettings:

@@ -179,6 +179,11 @@ def table_jobs(path: str | Path, *, min_step_time: float = 0.0) -> list[GaitJob]
     for row in rows:
         if _number(row["step_time"]) < min_step_time:
             continue
+        if row.get("model"):
+            raise EnvelopeTableError(
+                f"{path}: cell {row['cell_id']} was played on the model {row['model']}: the "
+                "controllers step the twin's scene only (a model plays the plan open loop)"
+            )
         robot = row["robot"]
         if robot not in specs:
             try:

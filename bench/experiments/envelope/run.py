@@ -32,8 +32,9 @@ from slopewalk.bench.experiments.envelope.cell import (
     run_cell_search,
 )
 from slopewalk.bench.experiments.envelope.config import EnvelopeConfig
-from slopewalk.bench.experiments.sweep.run import WORKER_START_S
+from slopewalk.bench.experiments.sweep.run import WORKER_START_S, on_model
 from slopewalk.bench.tables.envelope import envelope_format, is_failure
+from slopewalk.bench.tables.table import model_format
 
 RECORDINGS_DIR = "recordings"
 CELL_S = 1.3  # [s] per cell and worker, the first estimate: run_cell's CPU time, 8 cells of
@@ -48,15 +49,16 @@ def _is_error(row: dict) -> bool:
 
 
 def _batch(name: str, fn, config: EnvelopeConfig) -> Batch:
+    fmt = envelope_format(config.controllers)
     return Batch(
         name=name,
-        fmt=envelope_format(config.controllers),
+        fmt=fmt if config.model is None else model_format(fmt),
         fn=fn,
         key=lambda cell: cell.cell_id,
         label=lambda cell: cell.label,
         error_row=error_row,
         is_error=_is_error,
-        source=config.source,
+        source=config.source + on_model(config.model),
         unit="cells",
         outcome=_outcome,
     )
@@ -313,6 +315,8 @@ def _by_id(path, fmt) -> dict[str, dict]:
 def compare_budgets(table, bigger_table, base: list, bigger: list) -> Convergence:
     """The ``Convergence`` of the rows of ``base`` in ``table`` vs ``bigger`` in the other."""
     fmt = envelope_format(base[0].controllers if base else ())
+    if base and base[0].model is not None:
+        fmt = model_format(fmt)
     small, large = _by_id(table, fmt), _by_id(bigger_table, fmt)
     flips = found_flips = 0
     change = change_all = work_change = 0.0

@@ -38,6 +38,14 @@ slope and μ, is a trial in every ``actuators`` mode of the ``[grid]`` (whose ot
 must be left out). Either makes the table's ``gait`` columns
 (``tables.sweep.GAIT_COLUMNS``); neither goes with a controller or command noise.
 
+``model`` and ``map`` (paths relative to the file; ``sweep --model MODEL --map MAP``
+replaces both) play every trial on that unmodified MJCF/URDF model
+(``robot_import.model_file.ModelFile``): ``robot`` then defaults to ``"imported"`` (the
+spec imported from the model now; a path names an edited spec), ``actuators`` to
+``"servo_ff"``; the paper's robot, ``mass_scale``, controllers and ``envelope`` are
+refused, the model's digest enters every ``trial_id`` and the table gains the
+``model`` and ``model_digest`` columns (``tables.table.model_format``).
+
 ``[[grid]]`` may also be an array of tables; the sweep is the union of their
 products and the ``[[trial]]`` entries, de-duplicated by ``trial_id`` (first
 occurrence kept, in file order).
@@ -85,6 +93,7 @@ from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, 
     TrialSet,
     spec_text,
 )
+from slopewalk.bench.robot_import.model_file import ModelFile
 from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE_DEG
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SlopewalkError
@@ -92,7 +101,8 @@ from slopewalk.planner.spec import LINK_NAMES, RobotSpec, load_spec
 
 SWEEPS_DIR = Path(__file__).parents[1] / "sweeps"  # bench/experiments/sweeps/
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
-TOP_KEYS = ("description", "steps", "seed", "command_noise", "draw", "envelope", "grid", "trial")
+TOP_KEYS = ("description", "steps", "seed", "command_noise", "draw", "envelope", "model", "map",
+            "grid", "trial")  # fmt: skip
 DRAW_KEYS = ("family", "gaits", "seed")
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
@@ -105,6 +115,8 @@ DEFAULTS = {
     "controller": "none",
 }
 OPEN_LOOP = "none"  # the controller key's value for the plan played open loop
+IMPORTED = "imported"  # the robot key's default on a model: the spec imported from it now
+MODEL_MODE = "servo_ff"  # the actuators key's default on a model (its own servos)
 LEGS = tuple(name for name in LINK_NAMES if name != "pelvis")
 MASS_GROUPS = {"all": LINK_NAMES, "pelvis": ("pelvis",), "legs": LEGS} | {
     name: (name,) for name in LEGS
@@ -125,10 +137,11 @@ class SweepConfig:
     boxes: tuple[Box, ...] = field(repr=False)
     description: str = ""
     command_noise_deg: float = 0.0  # [deg]
+    model: ModelFile | None = None  # every trial played on this model (``sweep --model``)
 
     @cached_property
     def trials(self) -> TrialSet:
-        return TrialSet(self.boxes, self.steps, self.command_noise_deg)
+        return TrialSet(self.boxes, self.steps, self.command_noise_deg, self.model)
 
     @property
     def noisy(self) -> bool:
@@ -148,8 +161,9 @@ class SweepConfig:
         return any(value is not None for box in self.boxes for _, value in box.values[k])
 
 
-def load_sweep(path: str | Path | None = None) -> SweepConfig:
-    """Read and check a sweep file (default: ``bench/experiments/sweeps/paper.toml``).
+def load_sweep(path: str | Path | None = None, *, model: ModelFile | None = None) -> SweepConfig:
+    """Read and check a sweep file (default: ``bench/experiments/sweeps/paper.toml``);
+    ``model`` (``--model``) replaces the file's ``model`` and ``map`` keys.
 
     Raises:
         SweepError: unreadable file, unknown key, value out of range or missing
@@ -157,11 +171,15 @@ def load_sweep(path: str | Path | None = None) -> SweepConfig:
     """
     path = Path(path) if path is not None else DEFAULT_SWEEP
     data = load_toml(path, where=f"sweep file {str(path)!r}", kind="a sweep TOML", error=SweepError)
-    return sweep_from_dict(data, base_dir=path.parent, source=str(path))
+    return sweep_from_dict(data, base_dir=path.parent, source=str(path), model=model)
 
 
-def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> SweepConfig:
-    """Build a SweepConfig from parsed TOML; robot paths are relative to ``base_dir``.
+# long: a sweep file's top level, one check after the other
+def sweep_from_dict(
+    data: dict, *, base_dir: Path, source: str = "<dict>", model: ModelFile | None = None
+) -> SweepConfig:
+    """Build a SweepConfig from parsed TOML; robot, model and map paths are relative to
+    ``base_dir``; ``model`` replaces the file's ``model`` and ``map`` (module doc).
 
     Every value of every grid axis is checked (its range, and the gait it makes
     with the first values of the other axes); the product is not expanded.
@@ -186,6 +204,12 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
     grids = _tables(data, "grid", source)
     singles = _tables(data, "trial", source)
     gaits = _draws(data.get("draw"), source)
+    model = model or file_model(data, base_dir, source, SweepError)
+    if "envelope" in data and model is not None:
+        raise SweepError(
+            f"{source}: envelope with a model: the envelope tables' gaits are the default "
+            "robot's; run 'slopewalk envelope --model' for the model's own"
+        )
     if "envelope" in data:
         return _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, description)
     if gaits != (None,) and (noise or singles):
@@ -195,6 +219,10 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
     if not grids and not singles:
         raise SweepError(f"{source}: no trials: give a [grid] table or [[trial]] entries")
     robots: dict[str, RobotSpec] = {}
+    defaults = DEFAULTS
+    if model is not None:
+        robots[IMPORTED] = model.scene().spec
+        defaults = DEFAULTS | {"robot": IMPORTED, "actuators": MODEL_MODE}
     boxes = []
     for where, table in grids:
         _known(table, TRIAL_KEYS, f"{where}.", source)
@@ -204,16 +232,59 @@ def sweep_from_dict(data: dict, *, base_dir: Path, source: str = "<dict>") -> Sw
             )
         axes = {}
         for key in TRIAL_KEYS:
-            values = table.get(key, [DEFAULTS[key]])
+            values = table.get(key, [defaults[key]])
             if not isinstance(values, list) or not values:
                 raise SweepError(f"{source}: {where}.{key} = {values!r}: must be a non-empty list")
             axes[key] = values
-        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}", gaits))
+        where = f"{source}: {where}"
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, gaits, model))
     for where, table in singles:
         _known(table, TRIAL_KEYS, f"{where}.", source)
-        axes = {key: [table.get(key, DEFAULTS[key])] for key in TRIAL_KEYS}
-        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, f"{source}: {where}"))
-    return SweepConfig(source, steps, seeds, tuple(boxes), description, noise)
+        axes = {key: [table.get(key, defaults[key])] for key in TRIAL_KEYS}
+        where = f"{source}: {where}"
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, model=model))
+    return SweepConfig(source, steps, seeds, tuple(boxes), description, noise, model)
+
+
+def file_model(data: dict, base_dir: Path, source: str, error: type[SlopewalkError]):
+    """The ``ModelFile`` of a sweep or envelope file's ``model`` and ``map`` keys (paths
+    relative to ``base_dir``), or None without a ``model`` key."""
+    from slopewalk.bench.robot_import.mapfile import RobotImportError
+
+    paths = {}
+    for key in ("model", "map"):
+        value = data.get(key)
+        if value is not None and (not isinstance(value, str) or not value):
+            raise error(f"{source}: {key} = {value!r}: must be a file path (relative to the file)")
+        paths[key] = None if value is None else base_dir / value
+    if paths["model"] is None:
+        if paths["map"] is not None:
+            raise error(
+                f"{source}: map = {data['map']!r}: only with a model key, which is not given"
+            )
+        return None
+    try:
+        return ModelFile.of(paths["model"], paths["map"])
+    except RobotImportError as err:
+        raise error(f"{source}: {err}") from None
+
+
+def _on_model(axes: dict[str, list], model: ModelFile, where: str) -> None:
+    """Refuse what a trial on a model cannot be: the paper's robot, scaled masses, a
+    controller (a model plays the plan open loop)."""
+    for key, value, why in (
+        ("robot", "default", "the paper's biped is not the model; leave robot out (the spec "
+         f"imported from {model.name} now) or name a spec of 'slopewalk robot import'"),
+        ("controller", None, "a model plays the plan open loop"),
+    ):  # fmt: skip
+        values = [v for v in axes[key] if v == value or (value is None and v != OPEN_LOOP)]
+        if values:
+            raise SweepError(f"{where}.{key} = {values[0]!r} with a model: {why}")
+    if any(scale for scale in axes["mass_scale"]):
+        raise SweepError(
+            f"{where}.mass_scale = {axes['mass_scale']!r} with a model: the model's masses "
+            "are its own (a scaled spec would only change the plan)"
+        )
 
 
 def _seeds(value, source: str) -> tuple[int, ...]:
@@ -324,8 +395,12 @@ def _draws(value, source: str) -> tuple[GaitChoice | None, ...]:
     )
 
 
-def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, gaits=(None,)) -> Box:
-    """Check each value of each axis once; the grid as a ``Box``."""
+def _box(
+    axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, gaits=(None,), model=None
+) -> Box:
+    """Check each value of each axis once; the grid as a ``Box`` (of trials on ``model``)."""
+    if model is not None:
+        _on_model(axes, model, where)
     step_times = [_positive(v, "step_time", "s", where) for v in axes["step_time"]]
     slopes = []
     for value in axes["slope"]:
@@ -342,6 +417,8 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, ga
         for scale in axes["mass_scale"]
     ]
     controllers = [_controller(v, where) for v in axes["controller"]]
+    if model is not None:
+        _model_modes(axes["actuators"], bodies, where)
     if gaits != (None,) and any(c is not None for c in controllers):
         raise SweepError(f"{where}: [draw] with a controller: drawn gaits are played open loop")
     if noise and any(c is not None for c in controllers):
@@ -367,12 +444,26 @@ def _box(axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, ga
     for k, axis in enumerate(values[: AXES.index("seed")]):
         for _, value in axis[1:] if k else axis:
             combo = [*first[:k], value, *first[k + 1 :]]
-            trial = TrialSet((box,), steps, noise).make(combo)
+            trial = TrialSet((box,), steps, noise, model).make(combo)
             try:
                 trial.trial_spec()
             except SlopewalkError as err:
                 raise SweepError(f"{where}: {err}") from None
     return box
+
+
+def _model_modes(modes: list[str], bodies: list[Body], where: str) -> None:
+    """Refuse an actuator mode a model cannot play (``robot_import.scene.model_modes``)."""
+    from slopewalk.bench.robot_import.scene import model_modes
+
+    for body in bodies:
+        allowed = model_modes(body.spec)
+        for mode in modes:
+            if mode not in allowed:
+                raise SweepError(
+                    f"{where}.actuators = {mode!r} with a model: it plays on its own actuators "
+                    f"(gains the spec's [servo]); use {' or '.join(allowed)}"
+                )
 
 
 def _unique(pairs) -> tuple[tuple[str, object], ...]:

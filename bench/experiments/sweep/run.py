@@ -54,6 +54,7 @@ from slopewalk.bench.tables.sweep import (
     SWEEP_NOISE,
     outcome_columns,
 )
+from slopewalk.bench.tables.table import model_format
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -101,12 +102,14 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
     from slopewalk.planner.plan import plan_walk
 
     try:
+        # a model is fitted once per worker, its files' digest checked for every trial
+        scene = None if trial.model is None else trial.model.scene(trial.spec)
         plan = plan_walk(trial.spec, trial.gait())
-        result = run_trial(trial.spec, trial.trial_spec(), plan=plan)
+        result = run_trial(trial.spec, trial.trial_spec(), plan=plan, scene=scene)
         row = trial.inputs() | outcome_columns(result, plan)
         if record_dir is not None:
             try:
-                _record(Path(record_dir), trial.trial_id, plan, result)
+                _record(Path(record_dir), trial.trial_id, plan, result, scene)
             except Exception as err:  # the trial stands; a re-run with --record retries
                 row["error"] = f"recording failed: {one_line(err)}"
     except Exception as err:  # a trial's failure is a result, not a crash of the sweep
@@ -138,7 +141,12 @@ SWEEP_BATCH = Batch(
 __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep"]
 
 
-def _record(directory: Path, trial_id: str, plan, result) -> None:
+def on_model(model) -> str:
+    """ " on model NAME (sha256:…)": what a run's messages add to its file's name."""
+    return "" if model is None else f" on model {model.name} ({model.short_digest})"
+
+
+def _record(directory: Path, trial_id: str, plan, result, scene=None) -> None:
     """Write ``<trial_id>.rrd`` whole: recorded beside it, then moved into place; its plots
     at ``SWEEP_PLOT_RATE`` (a tenth of a trial's, a third of the size per simulated second)."""
     from slopewalk.bench.sim.recording import SWEEP_PLOT_RATE, record_trial
@@ -146,7 +154,7 @@ def _record(directory: Path, trial_id: str, plan, result) -> None:
     directory.mkdir(parents=True, exist_ok=True)
     tmp = directory / f".{trial_id}.{os.getpid()}.part.rrd"
     try:
-        written = record_trial(tmp, plan, result, plot_rate=SWEEP_PLOT_RATE)
+        written = record_trial(tmp, plan, result, plot_rate=SWEEP_PLOT_RATE, scene=scene)
         os.replace(written or tmp, directory / f"{trial_id}.rrd")
     finally:
         with contextlib.suppress(FileNotFoundError):
@@ -256,13 +264,17 @@ def run_sweep(
             return ""
         return f", about {duration(left / (sim_steps[0] / elapsed))} left"
 
+    # a controller, command noise or other gaits add columns (tables/sweep.py), a model its own
+    fmt = (
+        SWEEP_CONTROLLER
+        if config.closed_loop
+        else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP))
+    )
     result = run_batch(
-        replace(  # a controller, command noise or other gaits add columns (tables/sweep.py)
+        replace(
             SWEEP_BATCH,
-            source=config.source,
-            fmt=SWEEP_CONTROLLER
-            if config.closed_loop
-            else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP)),
+            source=config.source + on_model(config.model),
+            fmt=fmt if config.model is None else model_format(fmt),
         ),
         config.trials,
         total,

@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from slopewalk.bench.actuators import DEFAULT_MODE
+from slopewalk.bench.robot_import.model_file import ModelFile
 from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.errors import SlopewalkError
@@ -115,6 +116,8 @@ class SweepTrial:
         command_noise_deg: σ of the noise on every command row [deg], as written in the
             sweep file; 0: none.
         gait_choice: The gait walked instead of the nominal one (drawn or given), or None.
+        model: The unmodified model the plan is played on (``sweep --model``), ``spec``
+            its imported spec; None: the spec's twin.
     """
 
     step_time: float
@@ -130,6 +133,7 @@ class SweepTrial:
     controller: str | None = None
     command_noise_deg: float = 0.0
     gait_choice: GaitChoice | None = None
+    model: ModelFile | None = None
 
     @cached_property
     def trial_id(self) -> str:
@@ -155,6 +159,8 @@ class SweepTrial:
             key["command_noise_deg"] = self.command_noise_deg
         if self.gait_choice is not None:  # likewise: nominal gaits keep their ids
             key["gait"] = self.gait_choice.key
+        if self.model is not None:  # likewise: the twin's ids stay; the files' digest, not path
+            key["model"] = self.model.digest
         text = json.dumps(key, sort_keys=True, default=float)
         text = text.replace('"\\u0000"', self.spec_json or spec_text(self.spec), 1)
         return hashlib.sha256(text.encode()).hexdigest()[:12]
@@ -180,6 +186,8 @@ class SweepTrial:
             text += f" noise {self.command_noise_deg:g} deg seed {self.seed}"
         if self.gait_choice is not None:
             text += f" gait {self.gait_choice.source}"
+        if self.model is not None:
+            text += f" model {self.model.name}"
         return text
 
     @cached_property
@@ -216,19 +224,23 @@ class SweepTrial:
 
     def inputs(self) -> dict:
         """The input columns of this trial's row."""
-        return {
-            "trial_id": self.trial_id,
-            "step_time": self.step_time,
-            "slope_deg": self.slope_deg,
-            "friction": self.friction,
-            "actuators": self.actuators,
-            "robot": self.robot,
-            "mass_scale": self.mass_scale_text,
-            "steps": self.steps,
-            "seed": self.seed,
-            "controller": self.controller or "none",  # written only by closed-loop sweeps
-            "command_noise_deg": self.command_noise_deg,  # written only by noisy sweeps
-        } | self.gait_inputs()
+        return (
+            {
+                "trial_id": self.trial_id,
+                "step_time": self.step_time,
+                "slope_deg": self.slope_deg,
+                "friction": self.friction,
+                "actuators": self.actuators,
+                "robot": self.robot,
+                "mass_scale": self.mass_scale_text,
+                "steps": self.steps,
+                "seed": self.seed,
+                "controller": self.controller or "none",  # written only by closed-loop sweeps
+                "command_noise_deg": self.command_noise_deg,  # written only by noisy sweeps
+            }
+            | self.gait_inputs()
+            | model_inputs(self.model)
+        )
 
     def gait_inputs(self) -> dict:
         """The gait's columns (written only by sweeps of drawn or given gaits): its source and
@@ -248,6 +260,14 @@ class SweepTrial:
             "step_length_m": params.step_length,
             "sway_share": params.lean_share,
         }
+
+
+def model_inputs(model: ModelFile | None) -> dict:
+    """The model's columns of a row (written only by runs on a model): its name and the
+    first digits of its files' digest (``robot_import.model_file``)."""
+    if model is None:
+        return {}
+    return {"model": model.name, "model_digest": model.short_digest}
 
 
 @dataclass(frozen=True)
@@ -319,8 +339,15 @@ class TrialSet(Sequence):
     Indexing walks from the start (for tests and small sweeps).
     """
 
-    def __init__(self, boxes: tuple[Box, ...], steps: int, command_noise_deg: float = 0.0):
+    def __init__(
+        self,
+        boxes: tuple[Box, ...],
+        steps: int,
+        command_noise_deg: float = 0.0,
+        model: ModelFile | None = None,
+    ):
         self._boxes, self._steps, self._noise = boxes, steps, command_noise_deg
+        self._model = model
 
     @cached_property
     def _len(self) -> int:
@@ -363,6 +390,7 @@ class TrialSet(Sequence):
             controller,
             self._noise,
             gait,
+            self._model,
         )
 
     def simulated_steps(self) -> float:
