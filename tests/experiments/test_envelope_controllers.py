@@ -120,9 +120,7 @@ def test_an_extended_row_is_replayed_as_its_own_family(tmp_path):
         for name in ("pelvis_offset", "step_length", "lean_share", "hip_height", "tilt"):
             assert getattr(replayed, name) == pytest.approx(getattr(own, name), abs=1e-6)
         assert replayed.step_length == pytest.approx(row[f"{job.gait}_step_length_m"], abs=1e-6)
-        assert replayed.pelvis_offset == pytest.approx(
-            row[f"{job.gait}_pelvis_offset_m"], abs=1e-6
-        )
+        assert replayed.pelvis_offset == pytest.approx(row[f"{job.gait}_pelvis_offset_m"], abs=1e-6)
     verdicts = compare_envelope(jobs, (), workers=1)
     for job, v in zip(jobs, verdicts, strict=True):
         assert v["stiff", None] == job.table_verdicts["stiff"]
