@@ -207,3 +207,12 @@ def test_sampled_polygons_and_points_against_scipys_hull(points, axis, offset, f
     margin = _both(spec, np.array([side]), stance, swing, zmp, double)
     expected = _independent_margin(spec.sole_polygon, s, side, stance[0], swing[0], zmp[0], double)
     np.testing.assert_allclose(margin[0], expected, rtol=0, atol=1e-12)
+
+
+def test_a_longer_foot_stretches_the_polygon_with_its_rectangle():
+    """``with_foot_length(0.12)`` on the hexagon (heel 51, toe 49 mm → 61, 59 mm): each
+    x maps −51..49 mm onto −61..59 mm, x' = −61 + 1.2 (x + 51) mm (x = 40 → 48.2 mm); y stays."""
+    longer = _spec(HEXAGON).with_foot_length(0.12)
+    expected = [(-0.061 + 1.2 * (x + 0.051), y) for x, y in HEXAGON]
+    np.testing.assert_allclose(longer.sole_polygon, expected, rtol=0, atol=1e-15)
+    assert longer.sole_polygon[0][0] == pytest.approx(0.0482, abs=1e-15)
