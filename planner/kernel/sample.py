@@ -66,7 +66,6 @@ import numpy as np
 from numba import njit
 
 from slopewalk.planner.kernel import tables as tb
-from slopewalk.planner.sole import MAX_SOLE_VERTICES
 
 # Row layout of a plan sample (``write_rows``): where each quantity sits.
 Q, QD, QDD, TAU = 0, 8, 16, 24  # (8,) each: Table-I order [rad, rad/s, rad/s², N m]
@@ -80,9 +79,9 @@ POWER = 61  # Σ |τ θ̇| [W]
 POWER_JOINTS = 62  # (8,) |τ_i θ̇_i| [W]
 LEG_DISTANCE = 70  # (2,) hip-ankle distance of the stance and swing legs [m]
 # support polygon vertices [m]: (2M, 2) of a sole of M vertices (``tables.SOLE_COUNT``),
-# room for ``MAX_SOLE_VERTICES``; the columns past 4M are not written
+# room for ``tables.MAX_VERTICES``; the columns past 4M are NaN
 POLYGON = 72
-POLYGON_FLOATS = 4 * MAX_SOLE_VERTICES
+POLYGON_FLOATS = 4 * tb.MAX_VERTICES
 ROW = POLYGON + POLYGON_FLOATS
 
 BLOCK = tb.BLOCK  # samples per block at most
@@ -109,7 +108,8 @@ _TAURAW = _VERT + POLYGON_FLOATS * B  # m · u of each joint before the swing sp
 _TAU = _TAURAW + 9 * B  # joint torques (8)
 _SEG = _TAU + 8 * B  # smallest squared distance of the ZMP to a polygon edge
 _XS, _YS = _SEG + B, _SEG + 2 * B  # the stance sole's x and y
-_IN = _SEG + 3 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
+_COUNT = _SEG + 3 * B  # w[_COUNT]: the support polygon's vertex count 2M (one float)
+_IN = _SEG + 4 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
 _SIDE = _IN + tb.IN_SIDE * B  # stance side, 0.0 left / 1.0 right
 _SCALARS = _IN + tb.INPUTS * B
 # Frames 0..8 from _FR, FRAME rows each: 3 r + c is R[r, c] (column c the frame's axis
@@ -623,26 +623,23 @@ def _margin(geometry, double, n, w):
     its ``sole_polygon``); each vertex is written twice (incoming edge, outgoing edge),
     moved by the swing sole's offset in DSP where that edge faces it (the hull of both
     soles), as ``support_polygon`` writes them. In SSP on the rectangle the margin has a
-    closed form; otherwise it is that of a 2M-vertex convex polygon.
+    closed form; otherwise it is that of a 2M-vertex convex polygon. A sole of 4 vertices
+    (the rectangle) runs loops of a literal trip count, so the compiler unrolls them and
+    every row offset is a constant again (module doc: the inner loops vectorise); another
+    M runs the same loops over a run-time count, slower.
     """
     n = min(n, B)  # a bound on the trip count (module doc)
-    heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
-    offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
     corners = int(geometry[tb.SOLE_COUNT])
-    for v in range(2 * corners):
-        k = v // 2  # the corner, and the edge whose facing moves this copy of it
-        edge = (k - 1 + corners) % corners if v % 2 == 0 else k
-        cx, cy = geometry[tb.SOLE_XY + 2 * k], geometry[tb.SOLE_XY + 2 * k + 1]
-        nx, ny = geometry[tb.SOLE_NORMAL + 2 * edge], geometry[tb.SOLE_NORMAL + 2 * edge + 1]
-        for j in range(n):
-            shift = offset * (1.0 - 2.0 * w[_SIDE + j])  # the stance sole's; the swing's: −
-            xs, ys = w[_XS + j], w[_YS + j] + shift
-            dx = (w[_SW + j] - xs) if double else 0.0
-            dy = (w[_SW + B + j] - shift - ys) if double else 0.0
-            facing = dx * nx + dy * ny > 0
-            w[_VERT + 2 * v * B + j] = xs + cx + (dx if facing else 0.0)
-            w[_VERT + (2 * v + 1) * B + j] = ys + cy + (dy if facing else 0.0)
+    w[_COUNT] = 2.0 * corners
+    if corners == 4:
+        for v in range(8):
+            _vertex(geometry, double, v, 4, n, w)
+    else:
+        for v in range(2 * corners):
+            _vertex(geometry, double, v, corners, n, w)
     if not double and geometry[tb.SOLE_RECTANGLE] == 1.0:  # an axis-aligned rectangle
+        heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
+        offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
         for j in range(n):
             px, py = w[_ZX + j], w[_ZY + j]
             xs, ys = w[_XS + j], w[_YS + j] + offset * (1.0 - 2.0 * w[_SIDE + j])
@@ -652,8 +649,29 @@ def _margin(geometry, double, n, w):
             ox, oy = max(max(-rx0, -rx1), 0.0), max(max(-ry0, -ry1), 0.0)
             m = inside if inside >= 0 else -np.sqrt(ox * ox + oy * oy)
             w[_MARGIN + j] = m if (px == px and py == py) else np.nan
-        return
-    _polygon_margin(2 * corners, n, w)
+    elif corners == 4:
+        _polygon_margin(8, n, w)
+    else:
+        _polygon_margin(2 * corners, n, w)
+
+
+@njit(inline="always", **_KW)
+def _vertex(geometry, double, v, corners, n, w):
+    """Support polygon vertex v (of 2 ``corners``) at the block's samples (``_margin``)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
+    k = v // 2  # the corner, and the edge whose facing moves this copy of it
+    edge = (k - 1 + corners) % corners if v % 2 == 0 else k
+    cx, cy = geometry[tb.SOLE_XY + 2 * k], geometry[tb.SOLE_XY + 2 * k + 1]
+    nx, ny = geometry[tb.SOLE_NORMAL + 2 * edge], geometry[tb.SOLE_NORMAL + 2 * edge + 1]
+    for j in range(n):
+        shift = offset * (1.0 - 2.0 * w[_SIDE + j])  # the stance sole's; the swing's: −
+        xs, ys = w[_XS + j], w[_YS + j] + shift
+        dx = (w[_SW + j] - xs) if double else 0.0
+        dy = (w[_SW + B + j] - shift - ys) if double else 0.0
+        facing = dx * nx + dy * ny > 0
+        w[_VERT + 2 * v * B + j] = xs + cx + (dx if facing else 0.0)
+        w[_VERT + (2 * v + 1) * B + j] = ys + cy + (dy if facing else 0.0)
 
 
 @njit(inline="always", **_KW)
@@ -740,8 +758,9 @@ def write_rows(mass, gravity, n, w, out, index):
         row[STANCE_SOLE], row[STANCE_SOLE + 1], row[STANCE_SOLE + 2] = xs, ys, 0.0
         for k in range(3):
             row[SWING_SOLE + k] = w[_SW + k * B + j]
-        for k in range(POLYGON_FLOATS):  # past the sole's 4M: scratch, never read
-            row[POLYGON + k] = w[_VERT + k * B + j]
+        floats = 2 * int(w[_COUNT])  # the sole's 4M; NaN past them
+        for k in range(POLYGON_FLOATS):
+            row[POLYGON + k] = w[_VERT + k * B + j] if k < floats else np.nan
         row[MARGIN] = w[_MARGIN + j]
         row[POWER] = w[_POWER + j]
         row[LEG_DISTANCE], row[LEG_DISTANCE + 1] = w[_DIST + j], w[_DIST + B + j]

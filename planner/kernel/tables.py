@@ -49,10 +49,15 @@ SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH, SOLE_OFFSET, KNEE_
 # (no ``sole_polygon``: the SSP margin in closed form), the vertices about the sole's
 # centre x0, y0, x1, … and the outward unit normals of edges k → k+1, each padded with
 # zeros to ``sole.MAX_SOLE_VERTICES``.
+# The room is a literal here, not ``sole.MAX_SOLE_VERTICES`` read at compile time: the
+# kernel's cache keys on the kernel's own files (``cache``), so a constant the compiled
+# code freezes must live in one of them; the two are held equal on import.
+MAX_VERTICES = 8
+assert MAX_VERTICES == MAX_SOLE_VERTICES, "planner/sole.py and planner/kernel/tables.py"
 SOLE_COUNT, SOLE_RECTANGLE = 9, 10
 SOLE_XY = 11
-SOLE_NORMAL = SOLE_XY + 2 * MAX_SOLE_VERTICES
-GEOMETRY = SOLE_NORMAL + 2 * MAX_SOLE_VERTICES
+SOLE_NORMAL = SOLE_XY + 2 * MAX_VERTICES
+GEOMETRY = SOLE_NORMAL + 2 * MAX_VERTICES
 # A block (``Blocks``): at most BLOCK samples, in rows of BLOCK floats per input: the
 # sample's time [s], then its piece's floats (T0, T1, STANCE_X, TOWARDS, the shapes:
 # the same columns as ``GaitTable.floats``, T1 replaced by the time), its stance side
@@ -231,7 +236,7 @@ class ChainTable:
         off = chain.inertia[0] - np.einsum("ki,ij->kij", diagonal, np.eye(3))
         assert np.abs(off).max() <= 1e-12 * diagonal.max()
         sole = outline(spec)
-        room = np.zeros((2, MAX_SOLE_VERTICES, 2))
+        room = np.zeros((2, MAX_VERTICES, 2))
         room[0, : len(sole)], room[1, : len(sole)] = sole, edge_normals(sole)
         shape = [len(sole), float(spec.sole_polygon is None)]
         geometry = np.array(
