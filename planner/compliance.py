@@ -56,6 +56,9 @@ class CompliantWalk:
             where the servo holds the torques it needs (the loop is too soft).
         loop_torque: kp (q_ref − q) − kv q̇ + τ_ff [N m], (n, 8): what the servo must
             deliver; beyond its limit it saturates.
+        held: Where the loop through time (``servo_loop``) holds the second sole on the
+            plane, (n,) bool: double support, and after lift-off while the plane still
+            pushes it; None for the static fixed point.
     """
 
     plan: Plan
@@ -63,6 +66,7 @@ class CompliantWalk:
     iterations: int
     converged: bool
     loop_torque: np.ndarray
+    held: np.ndarray | None = None
 
 
 def compliant_walk(

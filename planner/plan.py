@@ -43,6 +43,7 @@ from slopewalk.planner.joints import JOINT_NAMES, stance_swing_to_left_right
 from slopewalk.planner.kernel import sample as sm
 from slopewalk.planner.kernel.run import kernel_walk
 from slopewalk.planner.kinematics import GRAVITY
+from slopewalk.planner.sole import outline
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.trajectory import Timeline
 from slopewalk.planner.verdict import predict
@@ -63,7 +64,8 @@ class Plan:
         stance: Stance leg, 0 left / 1 right, (n,).
         double_support: True in DSP, (n,).
         stance_sole, swing_sole: Sole points under the ankles [m], (n, 3).
-        polygon: Support polygon vertices, counter-clockwise [m], (n, 8, 2).
+        polygon: Support polygon vertices, counter-clockwise [m], (n, 2M, 2) for a sole of M
+            vertices (``sole.outline``: 4 for the rectangle), repeats allowed.
         margin: Signed ZMP distance to the polygon edge [m], positive inside, (n,).
         ground_force: Total ground force [N], (n, 3).
         stance_force, swing_force: Ground force on each foot (DSP split) [N], (n, 3).
@@ -229,6 +231,7 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
         return np.ascontiguousarray(rows[:, start : start + width]).reshape((-1, *shape))
 
     power = rows[:, sm.POWER_JOINTS : sm.POWER_JOINTS + 8]
+    vertices = 2 * len(outline(spec))  # the support polygon's: each sole vertex twice
     series = {
         "t": timeline.t.copy(),
         "q": cols(sm.Q, 8, (8,)),
@@ -244,7 +247,7 @@ def plan_walk(spec: RobotSpec, params: GaitParams) -> Plan:
         "double_support": ~timeline.in_ssp,
         "stance_sole": cols(sm.STANCE_SOLE, 3, (3,)),
         "swing_sole": cols(sm.SWING_SOLE, 3, (3,)),
-        "polygon": cols(sm.POLYGON, 16, (8, 2)),
+        "polygon": cols(sm.POLYGON, 2 * vertices, (vertices, 2)),
         "margin": rows[:, sm.MARGIN].copy(),
         "ground_force": cols(sm.GROUND, 3, (3,)),
         "stance_force": cols(sm.STANCE_FORCE, 3, (3,)),

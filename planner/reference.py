@@ -20,12 +20,13 @@ from slopewalk.planner.ik import leg_ik, tilted_plane_height
 from slopewalk.planner.joints import RIGHT, principal_angle
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.newton_euler import cross, inverse_dynamics_poses, swing_wrench_torques
+from slopewalk.planner.sole import edge_normals, outline
 from slopewalk.planner.trajectory import Curve, Timeline, blend, footprint_y
 from slopewalk.planner.zmp import (
     cop_of_wrench,
-    foot_corners,
     friction_ratio,
     signed_margin,
+    sole_vertices,
     support_polygon,
     zmp_lipm,
     zmp_multibody,
@@ -146,11 +147,12 @@ def solve_reference(
     coms = dyn.com
     zmp = zmp_multibody(chain.mass, coms, dyn.com_acc, dyn.momentum_rate, gravity)
     double = flat(~timeline.in_ssp)
-    heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
+    sole = outline(spec)  # the sole polygon (default: the rectangle) about the sole's centre
     polygon = support_polygon(
-        foot_corners(stance_sole, heel, toe, half, spec.sole_shift(stance)),
-        foot_corners(swing_sole, heel, toe, half, spec.sole_shift(1 - stance)),
+        sole_vertices(stance_sole, sole, spec.sole_shift(stance)),
+        sole_vertices(swing_sole, sole, spec.sole_shift(1 - stance)),
         double,
+        edge_normals(sole),
     )
     margin = signed_margin(zmp, polygon)
     power = np.abs(tau * qd).reshape(P, n, 8)

@@ -33,7 +33,16 @@ C = ∂τ/∂q̇ its velocity terms, all along the plan (n, 8, 8), and u the ser
 clipped as MuJoCo clips the actuator force (``forcerange``). In double support
 the second sole stays where it is: J δ̇ = 0 with J its pose's Jacobian (rows x, z,
 roll, pitch: ``HELD``), λ the ground's wrench beyond the plan's split; touching
-down, the sole stops in a plastic impact (``_landed``). In single support λ = 0.
+down, the sole stops in a plastic impact (``_landed``). After lift-off the plan lifts
+that sole, but the plane is unilateral: the sole stays where it is, J (q̇_ref + δ̇) = 0,
+for as long as the plane pushes it (λ_z > 0), and the loop's sway is the closed chain's
+until then (``_trailing``; ``CompliantWalk.held``). Measured in MuJoCo (default robot,
+``servo``, 2 s steps, ``tests/sim/test_trailing_sole.py``): the trailing foot stays loaded
+77–92 ms past the planned lift-off, the loop holds its sole 73–120 ms. Released at the
+planned lift-off, as before, the load jumped onto the stance leg in one step and rang
+the joint mode: on a random gait of the design draw (2 s, 10°, 15° lean) that swing put
+the ZMP 5 mm past the stance sole's inner edge and the predicted support tilt to 10.5°,
+where MuJoCo's CoP stays inside and its foot tilts 2.2°. Otherwise λ = 0 in single support.
 Integrated by backward Euler on the plan's time base (1 ms: ω dt ≈ 0.02, numerical
 damping ω dt / 2 ≈ 0.01, small against ζ); a joint whose output is clipped gets the
 constant ±τ_max in its row. The walk returned (q_ref + δ and its rates and
@@ -49,7 +58,8 @@ worse (0.9–1.0° against 0.7°). It predicts the tip one step early (1.25 s, M
 
 Not modelled: the joints' dry friction (``friction_loss``, 0.011 N m, < 1 % of the
 stall torque), a double-support sole lifting or sliding (the constraint is
-bilateral), and the swing sole touching the plane in single support (``strike``).
+bilateral until lift-off), and the swing sole touching the plane again in single
+support (``strike``).
 """
 
 from __future__ import annotations
@@ -115,12 +125,16 @@ def support_jacobian(plan: Plan) -> np.ndarray:
 HELD = [0, 2, 3, 4]
 
 
-def _constrained(matrix, rhs, jac, target):
-    """Solve matrix x − jacᵀ λ = rhs, jac x = target (min-norm where jac is rank deficient)."""
+def _constrained(matrix, rhs, jac, target, wrench=False):
+    """Solve matrix x − jacᵀ λ = rhs, jac x = target (min-norm where jac is rank deficient).
+
+    Returns x, or (x, λ) with ``wrench``: λ the held rows' wrench on the sole.
+    """
     dof, rows = matrix.shape[0], jac.shape[0]
     kkt = np.zeros((dof + rows, dof + rows))
     kkt[:dof, :dof], kkt[:dof, dof:], kkt[dof:, :dof] = matrix, -jac.T, jac
-    return np.linalg.lstsq(kkt, np.concatenate([rhs, target]), rcond=None)[0][:dof]
+    solution = np.linalg.lstsq(kkt, np.concatenate([rhs, target]), rcond=None)[0]
+    return (solution[:dof], solution[dof:]) if wrench else solution[:dof]
 
 
 def _landed(mass, jac, rate):
@@ -152,6 +166,25 @@ def _backward_euler(m, c, kk, force, d, v, h, jac):
         a = np.linalg.solve(matrix, rhs)
     v = v + h * a
     return v, d + h * v, a
+
+
+NORMAL = HELD.index(2)  # the held rows' normal force (z of S) in λ
+
+
+def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
+    """One step with the trailing sole kept where it is on the plane after lift-off, and
+    whether the plane still pushes it (λ_z > 0); (v', δ', a, pushed).
+
+    The plan lifts the sole at J q̇_ref; held, the sole stays put: J (q̇_ref + v') = 0.
+    Where the plane would have to pull (λ_z ≤ 0) the sole has left it, and the step is
+    the free one.
+    """
+    matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+    a, wrench = _constrained(matrix, rhs, jac, -jac @ (qd_ref + v) / h, wrench=True)
+    if not wrench[NORMAL] > 0.0:
+        return (*_backward_euler(m, c, kk, force, d, v, h, None), False)
+    v = v + h * a
+    return v, d + h * v, a, True
 
 
 def servo_walk(
@@ -215,18 +248,18 @@ def servo_walk(
     args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
     solved = _integrate_compiled(*args, gains, d) if compiled else None
     if solved is not None and solved[-1]:
-        delta, rate, accel, loop, finite = solved[:-1]
+        delta, rate, accel, loop, held, finite = solved[:-1]
     else:  # the reference, or a singular system met on the compiled path (kernel.servo)
         jac = support_jacobian(plan)[:, HELD] if both.any() else jac
         args = args[:-1] + (jac,)
-        delta, rate, accel, loop, finite = _integrate(*args, gains, d)
+        delta, rate, accel, loop, held, finite = _integrate(*args, gains, d)
     dyn = _Dynamics(plan)
     walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel, compiled=compiled)
     if compiled:
         from slopewalk.planner.kernel import cache
 
         cache.compiled("predictors")
-    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop)
+    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held)
 
 
 def _linearised_compiled(plan: Plan):
@@ -260,7 +293,8 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
         gains: (kp, kv, damping, armature, τ_max). d: δ at the first sample [rad], (8,).
 
     Returns:
-        δ, δ̇, δ̈, the request (n, 8) each, and False where the loop let go (|δ| ≥ π).
+        δ, δ̇, δ̈, the request (n, 8) each, where the second sole is held on the plane
+        (n,) bool, and False where the loop let go (|δ| ≥ π).
     """
     stiffness, velocity_gain, damping, armature, force_limit = gains
     n, dof = need.shape
@@ -269,8 +303,10 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
     rate = np.zeros((n, dof))
     accel = np.zeros((n, dof))
     loop = np.zeros((n, dof))
+    held_sole = np.zeros(n, dtype=bool)
     v = np.zeros(dof)
     finite = True
+    trailing = False  # the sole lifting off is still on the plane, loaded
     for k in range(n):
         h = dt[k]
         if k and stance[k] != stance[k - 1]:
@@ -283,7 +319,13 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
         c = velocity_c[k] + (damping + np.where(free, velocity_gain, 0.0)) * eye
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
         force = held + np.where(free, tau_ff[k] - velocity_gain * qd_ref[k], 0.0) - need[k]
-        v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if both[k] and h > 0 else None)
+        if trailing and not both[k] and h > 0:
+            v, d, a, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k])
+        else:
+            hold = both[k] and h > 0
+            v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if hold else None)
+            trailing = bool(both[k])
+        held_sole[k] = trailing
         if not (np.isfinite(d).all() and np.abs(d).max() < np.pi):
             finite = False  # the loop has let go of the plan: hold the last pose
             delta[k:], rate[k:], accel[k:] = delta[k - 1], 0.0, 0.0
@@ -291,4 +333,4 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
             break
         delta[k], rate[k], accel[k] = d, v, a
         loop[k] = raw
-    return delta, rate, accel, loop, finite
+    return delta, rate, accel, loop, held_sole, finite

@@ -19,6 +19,7 @@ import numpy as np
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SpecError
 from slopewalk.planner.ranges import Range
+from slopewalk.planner.sole import check_polygon
 
 LINK_NAMES = ("pelvis", "thigh", "shank", "ankle", "foot")
 # the keys of [joint_limits]: one per joint kind of a leg (joints.JOINT_KINDS: of each q entry)
@@ -33,7 +34,7 @@ GEOMETRY_KEYS = (
     "foot_width",
 )
 # optional [geometry] keys and their defaults (a spec without them is the paper's layout)
-OPTIONAL_GEOMETRY = {"sole_offset": 0.0, "knee_offset": 0.0}
+OPTIONAL_GEOMETRY: dict[str, Any] = {"sole_offset": 0.0, "knee_offset": 0.0, "sole_polygon": None}
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,11 @@ class RobotSpec:
         foot_length, foot_width: Sole rectangle [m].
         sole_offset: Lateral offset of the sole rectangle's centre from the ankle centre,
             outward (+y for the left foot, −y for the right) [m]; 0 centres it under the ankle.
+        sole_polygon: The left sole's contact outline, (x, y) vertices relative to the sole
+            point under the ankle [m], counter-clockwise, convex, inside the rectangle and
+            symmetric about y = ``sole_offset`` (``planner.sole``); None: the rectangle.
+            It refines the support polygon and the ZMP margin; the rectangle stays the
+            outer bound for tipping, strike, floor give, the twin's boxes and figures.
         knee_offset: Knee axis ahead of the hip–ankle line at the zero pose (legs straight,
             ankle under the hip) [m], negative behind; ``thigh`` and ``shank`` are then the
             lengths along that line, the links themselves ``thigh_link``/``shank_link`` long.
@@ -118,6 +124,7 @@ class RobotSpec:
     friction_loss: float
     sole_offset: float = 0.0
     knee_offset: float = 0.0
+    sole_polygon: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -133,6 +140,10 @@ class RobotSpec:
         Range(-half, half, "m", high_open=True).check(
             "geometry.sole_offset", self.sole_offset, SpecError
         )
+        if self.sole_polygon is not None:
+            pts = check_polygon(self.sole_polygon, self.heel_offset, self.ankle_to_toe, half,
+                                self.sole_offset)  # fmt: skip
+            object.__setattr__(self, "sole_polygon", pts)
         reach = min(self.thigh, self.shank)  # the knee stays within a link length of the line
         knee = Range(-reach, reach, "m", high_open=True)
         knee.check("geometry.knee_offset", self.knee_offset, SpecError)
@@ -238,7 +249,12 @@ class RobotSpec:
         delta = foot_length - self.foot_length
         shift = {"toe": delta, "heel": 0.0, "both": delta / 2}
         toe = self.ankle_to_toe + shift[extend]
-        return _replace(self, foot_length=foot_length, ankle_to_toe=toe)
+        polygon = self.sole_polygon
+        if polygon is not None:  # stretched along x with the rectangle: [−heel, toe] → new
+            heel, new_heel = self.heel_offset, foot_length - toe
+            scale = foot_length / self.foot_length
+            polygon = tuple((-new_heel + (x + heel) * scale, y) for x, y in polygon)
+        return _replace(self, foot_length=foot_length, ankle_to_toe=toe, sole_polygon=polygon)
 
     def with_mass_scale(self, scale: dict[str, float]) -> RobotSpec:
         """A copy with link masses and inertias multiplied by group factors.

@@ -27,6 +27,7 @@ import warnings
 import numpy as np
 
 from slopewalk.planner.newton_euler import cross
+from slopewalk.planner.sole import edge_normals, rectangle
 
 
 def zmp_multibody(mass, com, com_acc, momentum_rate, gravity) -> np.ndarray:
@@ -106,35 +107,56 @@ def foot_corners(center, heel: float, toe: float, half_width: float, shift=0.0) 
     Returns:
         Corners (x, y), shape (n, 4, 2).
     """
-    offsets = np.array(
-        [[toe, -half_width], [toe, half_width], [-heel, half_width], [-heel, -half_width]]
-    )
-    center = np.array(center, dtype=float)[:, :2]
-    center[:, 1] += shift
-    return center[:, None, :] + offsets
+    return sole_vertices(center, rectangle(heel, toe, half_width), shift)
 
 
-def support_polygon(stance_corners, other_corners, double_support) -> np.ndarray:
-    """Support polygon: the stance sole, or the convex hull of both soles in DSP.
-
-    Both soles are translates of one rectangle, so their hull is the Minkowski sum of
-    the rectangle with the segment joining them: each corner v_i becomes v_i or
-    v_i + d, or both, depending on which side of its two edges d points to. The
-    result is a counter-clockwise polygon of 8 vertices, repeats allowed.
+def sole_vertices(center, outline, shift=0.0) -> np.ndarray:
+    """A sole outline placed at feet parallel to x_S: center + (0, shift) + outline.
 
     Args:
-        stance_corners: (n, 4, 2) stance sole, counter-clockwise.
-        other_corners: (n, 4, 2) other sole (same rectangle, translated).
-        double_support: (n,) bool, True where both feet carry load.
+        center: Sole point under the ankle in S [m], shape (n, 2) (or (n, 3)).
+        outline: Vertices about the sole's centre, counter-clockwise, (M, 2) [m]
+            (``sole.outline``: the same for both feet).
+        shift: y of the sole's centre from the sole point [m], scalar or (n,).
 
     Returns:
-        Vertices, shape (n, 8, 2).
+        Vertices (x, y), shape (n, M, 2).
+    """
+    center = np.array(center, dtype=float)[:, :2]
+    center[:, 1] += shift
+    return center[:, None, :] + np.asarray(outline, dtype=float)
+
+
+def support_polygon(stance_corners, other_corners, double_support, normals=None) -> np.ndarray:
+    """Support polygon: the stance sole, or the convex hull of both soles in DSP.
+
+    Both soles are translates of one convex outline (M vertices), so their hull is the
+    Minkowski sum of the outline with the segment d joining them: each vertex v_i becomes
+    v_i or v_i + d, or both, depending on which side of its two edges d points to. The
+    result is a counter-clockwise polygon of 2M vertices, repeats allowed (each vertex
+    twice in SSP).
+
+    Args:
+        stance_corners: (n, M, 2) stance sole, counter-clockwise.
+        other_corners: (n, M, 2) other sole (the same outline, translated).
+        double_support: (n,) bool, True where both feet carry load.
+        normals: Outward unit normals of the outline's edges k → k+1, (M, 2)
+            (``sole.edge_normals`` of ``sole.outline``, as the kernel takes them); None:
+            from the first row's corners.
+
+    Returns:
+        Vertices, shape (n, 2M, 2).
     """
     d = (other_corners[:, 0] - stance_corners[:, 0]) * double_support[:, None]  # (n, 2)
-    normals = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])  # edges i → i+1
-    ahead = (d @ normals.T) > 0  # (n, 4): edge i faces the direction d
-    out = np.empty(stance_corners.shape[:1] + (8, 2))
-    for i in range(4):
+    corners = stance_corners.shape[1]
+    if normals is None:
+        if not len(d):
+            return np.empty((0, 2 * corners, 2))
+        normals = edge_normals(stance_corners[0] - stance_corners[0, 0])  # every row's
+    # (n, M): edge i faces the direction d (the kernel's products and sum, no BLAS)
+    ahead = d[:, :1] * normals[:, 0] + d[:, 1:] * normals[:, 1] > 0
+    out = np.empty(stance_corners.shape[:1] + (2 * corners, 2))
+    for i in range(corners):
         incoming, outgoing = ahead[:, i - 1], ahead[:, i]
         v, vd = stance_corners[:, i], stance_corners[:, i] + d
         first = np.where(incoming[:, None], vd, v)

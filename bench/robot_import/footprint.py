@@ -13,8 +13,11 @@ frame at the reference pose (``fit``: x forward, z up), per geom type:
   said so (``Footprint.bounded``).
 
 Points within ``LOWEST_TOLERANCE`` of the lowest one are the contact face. The spec's sole is
-still the rectangle around them (``geometry.foot_length`` …, ``sole_offset``): the report
-states how much larger than this footprint that rectangle is.
+the rectangle around them (``geometry.foot_length`` …, ``sole_offset``) and, where the
+footprint is not that rectangle, ``geometry.sole_polygon``: the footprint itself
+(``spec_polygon``), when it is symmetric about the sole's centre line to
+``SYMMETRY_TOLERANCE`` and has at most ``MAX_SOLE_VERTICES`` vertices; otherwise the
+rectangle alone, and the report says why and how much larger than the footprint it is.
 """
 
 from __future__ import annotations
@@ -25,7 +28,13 @@ import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
+from slopewalk.planner.errors import SpecError
+from slopewalk.planner.sole import MAX_SOLE_VERTICES, check_polygon
+
 LOWEST_TOLERANCE = 1e-6  # [m] contact points this close to the lowest are the sole face
+# [m] a footprint symmetric about its centre line to this (mesh vertices are float32 in
+# MuJoCo, ~1e-8 m off at foot scale) is written symmetric to the last bit
+SYMMETRY_TOLERANCE = 1e-6
 _EXACT = {
     int(mujoco.mjtGeom.mjGEOM_BOX),
     int(mujoco.mjtGeom.mjGEOM_MESH),
@@ -95,3 +104,40 @@ def sole_footprint(model, data, frame, geoms, ankle: np.ndarray) -> Footprint:
     except (QhullError, ValueError):  # a point or a segment: no area to wrap
         return Footprint(np.unique(face.round(12), axis=0), bounded)
     return Footprint(face[hull.vertices], bounded)  # counter-clockwise in 2-D
+
+
+def spec_polygon(foot: Footprint, extent) -> tuple[list[list[float]] | None, str]:
+    """``geometry.sole_polygon`` from the left sole's footprint, or None and why not.
+
+    The rectangle ``extent`` (x min, x max, y min, y max from the ankle [m], the spec's
+    sole rectangle) is the footprint already when each of its corners is a footprint vertex
+    to ``SYMMETRY_TOLERANCE``: then None (the spec keeps the rectangle alone, as before the
+    key existed). Otherwise the footprint's vertices, each pair mirrored about the centre
+    line y = (y min + y max)/2 averaged so the polygon is symmetric exactly, clipped onto
+    the rectangle, as the spec checks them (``sole.check_polygon``).
+
+    Returns:
+        (vertices [[x, y], …] counter-clockwise [m] or None, a phrase for the report).
+    """
+    x0, x1, y0, y1 = extent
+    p = np.asarray(foot.vertices, dtype=float)
+    corners = np.array([[x1, y0], [x1, y1], [x0, y1], [x0, y0]])
+    if len(p) >= 3 and all(np.abs(p - c).max(axis=1).min() <= SYMMETRY_TOLERANCE for c in corners):
+        return None, "the footprint is the rectangle"
+    if not 3 <= len(p) <= MAX_SOLE_VERTICES:
+        return None, f"{len(p)} vertices (the planner takes 3 to {MAX_SOLE_VERTICES})"
+    centre = (y0 + y1) / 2
+    mirror = p * [1.0, -1.0] + [0.0, 2 * centre]
+    gap = np.abs(mirror[:, None, :] - p[None, :, :]).max(axis=2)
+    partner = gap.argmin(axis=1)
+    worst = float(gap.min(axis=1).max())
+    if worst > SYMMETRY_TOLERANCE:
+        return None, f"not symmetric about its centre line ({worst * 1e3:.3g} mm off)"
+    sym = (p + mirror[partner]) / 2
+    sym = np.clip(sym, [x0, y0], [x1, y1])
+    vertices = [[float(x), float(y)] for x, y in sym]
+    try:
+        check_polygon(vertices, -x0, x1, (y1 - y0) / 2, centre)
+    except SpecError as err:
+        return None, f"refused as a sole polygon ({err})"
+    return vertices, "written as geometry.sole_polygon"

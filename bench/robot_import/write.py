@@ -10,10 +10,13 @@ doubles. ``report_lines`` lists every approximation with its size.
 
 from __future__ import annotations
 
+from typing import Any
+
 import mujoco
 import numpy as np
 
 from slopewalk.bench.robot_import.fit import Fit
+from slopewalk.bench.robot_import.footprint import SYMMETRY_TOLERANCE, spec_polygon
 from slopewalk.bench.robot_import.lump import LEG_LINKS, lump_links, mirrored
 from slopewalk.bench.robot_import.mapfile import SIDES, RobotMap
 from slopewalk.planner.spec import JOINT_LIMIT_KEYS, LINK_NAMES, SERVO, load_spec, spec_from_dict
@@ -41,13 +44,17 @@ def imported_spec(fit: Fit, robot_map: RobotMap | None = None) -> tuple[dict, li
             f"links.{name}: the right leg's differs from the mirrored left's by "
             f"{asym:.3g} (relative mass, or m of CoM); the spec mirrors the left"
         )
+    geometry: dict[str, Any] = {k: float(v) for k, v in fit.geometry.items()}
     data = {
         "name": fit.name,
-        "geometry": {k: float(v) for k, v in fit.geometry.items()},
+        "geometry": geometry,
         "links": tables,
         "joint_limits": _limits(fit, notes),
         "servo": _servo(fit, robot_map, notes),
     }
+    polygon, _ = spec_polygon(fit.footprints["left"], fit.sole["left"])
+    if polygon is not None:
+        geometry["sole_polygon"] = polygon
     notes += _geometry_notes(fit)
     spec_from_dict(data, source=f"imported from {fit.path}")  # refuses a non-physical result
     return data, notes
@@ -182,10 +189,17 @@ def _footprint_note(fit: Fit) -> str:
     )
     larger = f"{(rectangle / foot.area - 1) * 100:.1f} % larger" if foot.area > 0 else "larger"
     bound = "; some sole geoms by their bounding boxes (an outer bound)" if foot.bounded else ""
-    return (
-        f"sole footprint: the contact face of the left sole geoms is {shape}{bound}; the "
-        f"planner's support polygon is the rectangle around it, {rectangle * 1e6:.0f} mm^2, "
-        f"{larger}"
+    polygon, why = spec_polygon(foot, fit.sole["left"])
+    head = f"sole footprint: the contact face of the left sole geoms is {shape}{bound}; "
+    if polygon is not None:
+        return head + (
+            f"{why} (symmetrised to its centre line, to {SYMMETRY_TOLERANCE * 1e3:g} mm), the "
+            "planner's sole; tipping, strike and floor give keep the rectangle around it, "
+            f"{rectangle * 1e6:.0f} mm^2, {larger}"
+        )
+    return head + (
+        f"the planner's support polygon is the rectangle around it ({why}), "
+        f"{rectangle * 1e6:.0f} mm^2, {larger}"
     )
 
 

@@ -386,15 +386,36 @@ def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsB
                 name=body.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
                 fromto=[0, 0, 0, x, 0, -length], size=[_LEG_RADIUS, 0, 0],
             )  # fmt: skip
-        foot_body.add_geom(
-            mjs.find_default("foot"), name=f"{pre}foot", size=half_sole,
-            pos=[(toe - heel) / 2, spec.sole_shift(side), sole + _SOLE_THICKNESS / 2],
-        )  # fmt: skip
+        if spec.sole_polygon is None:
+            foot_body.add_geom(
+                mjs.find_default("foot"), name=f"{pre}foot", size=half_sole,
+                pos=[(toe - heel) / 2, spec.sole_shift(side), sole + _SOLE_THICKNESS / 2],
+            )  # fmt: skip
+        else:
+            _add_sole_prism(mjs, foot_body, spec, side, pre)
         for name, x in (("sole", 0.0), ("toe", toe), ("heel", -heel)):
             foot_body.add_site(name=f"{pre}{name}", pos=[x, 0, sole])
     legs = np.tile(home, 2)
     mjs.add_key(name="home", qpos=[0, 0, height, 1, 0, 0, 0, *legs], ctrl=legs)
     return pelvis
+
+
+def _add_sole_prism(mjs: mujoco.MjSpec, foot: mujoco.MjsBody, spec: RobotSpec, side: int, pre: str):
+    """The foot's collision geometry for a ``sole_polygon``: a convex mesh, the polygon
+    (the right foot's mirrored in y) extruded ``_SOLE_THICKNESS`` up from the sole.
+
+    MuJoCo's plane–convex collision keeps at most 4 contact points per geom, at vertices
+    of the mesh's bottom face: a sole of more than 4 vertices stands on 4 of them (inside
+    the polygon, not necessarily spanning it).
+    """
+    sole = np.array(spec.sole_polygon) * [1.0, 1.0 - 2.0 * side]
+    bottom = -spec.ankle_height
+    rings = [np.c_[sole, np.full(len(sole), z)] for z in (bottom, bottom + _SOLE_THICKNESS)]
+    mjs.add_mesh(name=f"{pre}sole", uservert=np.vstack(rings).ravel().tolist())
+    foot.add_geom(
+        mjs.find_default("foot"), name=f"{pre}foot", type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname=f"{pre}sole",
+    )  # fmt: skip
 
 
 # Sites at body origins, named after the physical joint there (the foot's is the ankle's).

@@ -286,7 +286,7 @@ def _log_balance(rec, plan: Plan, series: dict, sim: dict, R: np.ndarray, rate: 
     walk = every(series["t"], rate)
     t = np.asarray(series["t"], float)[walk]
     idx = np.clip(np.searchsorted(plan.t, t), 0, plan.t.size - 1)
-    polygon = plan.polygon[idx]  # (k, 8, 2) in S
+    polygon = plan.polygon[idx]  # (k, 2M, 2) in S (M: the sole's vertices)
     strips = _on_plane(np.concatenate([polygon, polygon[:, :1]], axis=1), R)  # closed
     rec.send_columns(
         "world/support_polygon",

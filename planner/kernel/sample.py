@@ -72,14 +72,17 @@ Q, QD, QDD, TAU = 0, 8, 16, 24  # (8,) each: Table-I order [rad, rad/s, rad/s²,
 ZMP, ZMP_LIPM, COP = 32, 34, 36  # (2,) each [m]
 COM, COM_ACC = 38, 41  # (3,) whole-body CoM [m] and its acceleration [m/s²]
 STANCE_SOLE, SWING_SOLE = 44, 47  # (3,) [m]
-POLYGON = 50  # (8, 2) support polygon vertices [m]
-MARGIN = 66  # signed ZMP margin [m], positive inside
-GROUND, STANCE_FORCE, SWING_FORCE = 67, 70, 73  # (3,) [N]
-FRICTION = 76  # |F_t| / F_n of the total ground force
-POWER = 77  # Σ |τ θ̇| [W]
-POWER_JOINTS = 78  # (8,) |τ_i θ̇_i| [W]
-LEG_DISTANCE = 86  # (2,) hip-ankle distance of the stance and swing legs [m]
-ROW = 88
+MARGIN = 50  # signed ZMP margin [m], positive inside
+GROUND, STANCE_FORCE, SWING_FORCE = 51, 54, 57  # (3,) [N]
+FRICTION = 60  # |F_t| / F_n of the total ground force
+POWER = 61  # Σ |τ θ̇| [W]
+POWER_JOINTS = 62  # (8,) |τ_i θ̇_i| [W]
+LEG_DISTANCE = 70  # (2,) hip-ankle distance of the stance and swing legs [m]
+# support polygon vertices [m]: (2M, 2) of a sole of M vertices (``tables.SOLE_COUNT``),
+# room for ``tables.MAX_VERTICES``; the columns past 4M are NaN
+POLYGON = 72
+POLYGON_FLOATS = 4 * tb.MAX_VERTICES
+ROW = POLYGON + POLYGON_FLOATS
 
 BLOCK = tb.BLOCK  # samples per block at most
 B = BLOCK  # one row of the scratch
@@ -100,12 +103,13 @@ _FS, _MS = 73 * B, 76 * B  # the swing foot's share of the ground wrench (3 + 3)
 _ZX, _ZY = 79 * B, 80 * B  # ZMP
 _POWER = 81 * B
 _MARGIN = 82 * B
-_VERT = 83 * B  # polygon vertices x0, y0, x1, … (16)
-_TAURAW = 99 * B  # m · u of each joint before the swing split (9: row 0 unused)
-_TAU = 108 * B  # joint torques (8)
-_SEG = 116 * B  # smallest squared distance of the ZMP to a polygon edge
-_XS, _YS = 117 * B, 118 * B  # the stance sole's x and y
-_IN = 119 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
+_VERT = 83 * B  # polygon vertices x0, y0, x1, … (POLYGON_FLOATS)
+_TAURAW = _VERT + POLYGON_FLOATS * B  # m · u of each joint before the swing split (9: row 0 unused)
+_TAU = _TAURAW + 9 * B  # joint torques (8)
+_SEG = _TAU + 8 * B  # smallest squared distance of the ZMP to a polygon edge
+_XS, _YS = _SEG + B, _SEG + 2 * B  # the stance sole's x and y
+_COUNT = _SEG + 3 * B  # w[_COUNT]: the support polygon's vertex count 2M (one float)
+_IN = _SEG + 4 * B  # the block's inputs (``tables.Blocks``: INPUTS rows)
 _SIDE = _IN + tb.IN_SIDE * B  # stance side, 0.0 left / 1.0 right
 _SCALARS = _IN + tb.INPUTS * B
 # Frames 0..8 from _FR, FRAME rows each: 3 r + c is R[r, c] (column c the frame's axis
@@ -615,31 +619,27 @@ def _unsplit(i, n, w):
 def _margin(geometry, double, n, w):
     """``zmp.support_polygon`` of the two soles and ``zmp.signed_margin`` of the ZMP.
 
-    In SSP the polygon is the stance sole's rectangle (its repeated vertices kept, as
-    ``support_polygon`` writes them) and the margin has a closed form; in DSP it is the
-    hull of both soles (each vertex moved by the swing sole's offset where an edge
-    faces that way) and the margin that of an 8-vertex convex polygon.
+    The sole is the outline of M vertices of ``tables.SOLE_XY`` (the spec's rectangle or
+    its ``sole_polygon``); each vertex is written twice (incoming edge, outgoing edge),
+    moved by the swing sole's offset in DSP where that edge faces it (the hull of both
+    soles), as ``support_polygon`` writes them. In SSP on the rectangle the margin has a
+    closed form; otherwise it is that of a 2M-vertex convex polygon. A sole of 4 vertices
+    (the rectangle) runs loops of a literal trip count, so the compiler unrolls them and
+    every row offset is a constant again (module doc: the inner loops vectorise); another
+    M runs the same loops over a run-time count, slower.
     """
     n = min(n, B)  # a bound on the trip count (module doc)
-    heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
-    offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
-    # the corners (toe, −half), (toe, half), (−heel, half), (−heel, −half), each twice
-    # (incoming edge, outgoing edge); edge k's outward normal is +x, +y, −x, −y
-    corner_x = (toe, toe, toe, toe, -heel, -heel, -heel, -heel)
-    corner_y = (-half, -half, half, half, half, half, -half, -half)
-    normal_x = (0.0, 1.0, 1.0, 0.0, 0.0, -1.0, -1.0, 0.0)  # of the edge whose facing
-    normal_y = (-1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, -1.0)  # moves each vertex
-    for v in range(8):
-        nx, ny = normal_x[v], normal_y[v]
-        for j in range(n):
-            shift = offset * (1.0 - 2.0 * w[_SIDE + j])  # the stance sole's; the swing's: −
-            xs, ys = w[_XS + j], w[_YS + j] + shift
-            dx = (w[_SW + j] - xs) if double else 0.0
-            dy = (w[_SW + B + j] - shift - ys) if double else 0.0
-            facing = dx * nx + dy * ny > 0
-            w[_VERT + 2 * v * B + j] = xs + corner_x[v] + (dx if facing else 0.0)
-            w[_VERT + (2 * v + 1) * B + j] = ys + corner_y[v] + (dy if facing else 0.0)
-    if not double:  # the stance sole alone: an axis-aligned rectangle, in closed form
+    corners = int(geometry[tb.SOLE_COUNT])
+    w[_COUNT] = 2.0 * corners
+    if corners == 4:
+        for v in range(8):
+            _vertex(geometry, double, v, 4, n, w)
+    else:
+        for v in range(2 * corners):
+            _vertex(geometry, double, v, corners, n, w)
+    if not double and geometry[tb.SOLE_RECTANGLE] == 1.0:  # an axis-aligned rectangle
+        heel, toe, half = geometry[tb.HEEL], geometry[tb.TOE], geometry[tb.HALF_WIDTH]
+        offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
         for j in range(n):
             px, py = w[_ZX + j], w[_ZY + j]
             xs, ys = w[_XS + j], w[_YS + j] + offset * (1.0 - 2.0 * w[_SIDE + j])
@@ -649,12 +649,39 @@ def _margin(geometry, double, n, w):
             ox, oy = max(max(-rx0, -rx1), 0.0), max(max(-ry0, -ry1), 0.0)
             m = inside if inside >= 0 else -np.sqrt(ox * ox + oy * oy)
             w[_MARGIN + j] = m if (px == px and py == py) else np.nan
-        return
+    elif corners == 4:
+        _polygon_margin(8, n, w)
+    else:
+        _polygon_margin(2 * corners, n, w)
+
+
+@njit(inline="always", **_KW)
+def _vertex(geometry, double, v, corners, n, w):
+    """Support polygon vertex v (of 2 ``corners``) at the block's samples (``_margin``)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    offset = geometry[tb.SOLE_OFFSET]  # each sole's centre, outward of its sole point
+    k = v // 2  # the corner, and the edge whose facing moves this copy of it
+    edge = (k - 1 + corners) % corners if v % 2 == 0 else k
+    cx, cy = geometry[tb.SOLE_XY + 2 * k], geometry[tb.SOLE_XY + 2 * k + 1]
+    nx, ny = geometry[tb.SOLE_NORMAL + 2 * edge], geometry[tb.SOLE_NORMAL + 2 * edge + 1]
+    for j in range(n):
+        shift = offset * (1.0 - 2.0 * w[_SIDE + j])  # the stance sole's; the swing's: −
+        xs, ys = w[_XS + j], w[_YS + j] + shift
+        dx = (w[_SW + j] - xs) if double else 0.0
+        dy = (w[_SW + B + j] - shift - ys) if double else 0.0
+        facing = dx * nx + dy * ny > 0
+        w[_VERT + 2 * v * B + j] = xs + cx + (dx if facing else 0.0)
+        w[_VERT + (2 * v + 1) * B + j] = ys + cy + (dy if facing else 0.0)
+
+
+@njit(inline="always", **_KW)
+def _polygon_margin(count, n, w):
+    """``zmp.signed_margin`` of the ZMP to the ``count``-vertex polygon in the _VERT rows."""
     for j in range(n):
         w[_MARGIN + j] = np.inf  # the smallest signed distance to an edge's line
         w[_SEG + j] = np.inf
-    for v in range(8):
-        a, b = _VERT + 2 * v * B, _VERT + 2 * ((v + 1) % 8) * B
+    for v in range(count):
+        a, b = _VERT + 2 * v * B, _VERT + 2 * ((v + 1) % count) * B
         for j in range(n):
             px, py = w[_ZX + j], w[_ZY + j]
             vx, vy = w[a + j], w[a + B + j]
@@ -731,8 +758,9 @@ def write_rows(mass, gravity, n, w, out, index):
         row[STANCE_SOLE], row[STANCE_SOLE + 1], row[STANCE_SOLE + 2] = xs, ys, 0.0
         for k in range(3):
             row[SWING_SOLE + k] = w[_SW + k * B + j]
-        for k in range(16):
-            row[POLYGON + k] = w[_VERT + k * B + j]
+        floats = 2 * int(w[_COUNT])  # the sole's 4M; NaN past them
+        for k in range(POLYGON_FLOATS):
+            row[POLYGON + k] = w[_VERT + k * B + j] if k < floats else np.nan
         row[MARGIN] = w[_MARGIN + j]
         row[POWER] = w[_POWER + j]
         row[LEG_DISTANCE], row[LEG_DISTANCE + 1] = w[_DIST + j], w[_DIST + B + j]

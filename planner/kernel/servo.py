@@ -4,7 +4,8 @@
 its readable numpy twin, held equal by tests/planner/test_kernel_servo.py): backward
 Euler on the plan's time base, the output clipped at ±τ_max, the legs' roles swapped
 at each change of stance, and in double support the second sole held (a plastic
-impact stops it, then J v = 0). Its linear systems (8 × 8, the 12 × 12 KKT system of
+impact stops it, then J v = 0), and after lift-off kept where it is while the plane
+pushes it (``_trailing``). Its linear systems (8 × 8, the 12 × 12 KKT system of
 the held sole, the 4 × 4 impact) are solved by LU with partial pivoting, written
 out (``_solve``): where they are regular, as on every walk measured (the held rows'
 smallest singular value ≥ 0.1 on the default walks), that is the one solution
@@ -74,8 +75,8 @@ def _mv(a, x, out):
 
 @njit(**_KW)
 def _constrained(matrix, rhs, jac, target):
-    """``servo_loop._constrained``: matrix x − jacᵀ λ = rhs, jac x = target, and whether
-    the system is regular (then its one solution is numpy's minimum-norm one)."""
+    """``servo_loop._constrained``: matrix x − jacᵀ λ = rhs, jac x = target: x, λ, and
+    whether the system is regular (then its one solution is numpy's minimum-norm one)."""
     dof, rows = matrix.shape[0], jac.shape[0]
     kkt = np.zeros((dof + rows, dof + rows))
     b = np.empty(dof + rows)
@@ -89,10 +90,12 @@ def _constrained(matrix, rhs, jac, target):
     for r in range(rows):
         b[dof + r] = target[r]
     x, ok = _solve(kkt, b)
-    out = np.empty(dof)
+    out, wrench = np.empty(dof), np.empty(rows)
     for i in range(dof):
         out[i] = x[i]
-    return out, ok
+    for r in range(rows):
+        wrench[r] = x[dof + r]
+    return out, wrench, ok
 
 
 @njit(**_KW)
@@ -150,7 +153,7 @@ def _step(m, c, kk, force, d, v, h, jac, held):
         target = _mv(jac, v, np.empty(jac.shape[0]))
         for r in range(jac.shape[0]):
             target[r] = -target[r] / h
-        a, good = _constrained(matrix, rhs, jac, target)
+        a, _, good = _constrained(matrix, rhs, jac, target)
     else:
         a, good = _solve(matrix, rhs)
     vn, dn = np.empty(dof), np.empty(dof)
@@ -158,6 +161,41 @@ def _step(m, c, kk, force, d, v, h, jac, held):
         vn[i] = v[i] + h * a[i]
         dn[i] = d[i] + h * vn[i]
     return vn, dn, a, ok and good
+
+
+_NORMAL = 1  # servo_loop.NORMAL: the normal force's row in λ (HELD = x, z, roll, pitch)
+
+
+@njit(**_KW)
+def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
+    """``servo_loop._trailing``: the step with the lifting sole kept on the plane,
+    J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0); (v', δ',
+    a, whether every system was regular, whether the plane still pushes)."""
+    dof = d.shape[0]
+    ahead, lifted = np.empty(dof), np.empty(dof)
+    for i in range(dof):
+        ahead[i] = d[i] + h * v[i]
+        lifted[i] = qd_ref[i] + v[i]
+    cv, kd = _mv(c, v, np.empty(dof)), _mv(kk, ahead, np.empty(dof))
+    matrix, rhs = np.empty((dof, dof)), np.empty(dof)
+    for i in range(dof):
+        rhs[i] = force[i] - cv[i] - kd[i]
+        for k in range(dof):
+            matrix[i, k] = m[i, k] + h * c[i, k] + h * h * kk[i, k]
+    target = _mv(jac, lifted, np.empty(jac.shape[0]))
+    for r in range(jac.shape[0]):
+        target[r] = -target[r] / h
+    a, wrench, good = _constrained(matrix, rhs, jac, target)
+    if not good:
+        return v, d, a, False, False
+    if not wrench[_NORMAL] > 0.0:
+        vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, False)
+        return vn, dn, a, ok, False
+    vn, dn = np.empty(dof), np.empty(dof)
+    for i in range(dof):
+        vn[i] = v[i] + h * a[i]
+        dn[i] = d[i] + h * vn[i]
+    return vn, dn, a, True, True
 
 
 @njit(**_KW)
@@ -198,7 +236,8 @@ def _let_go(d):
 
 @njit(**_KW)
 def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, both, jac, gains, d):
-    """``servo_loop._integrate``: the servo loop's δ, δ̇, δ̈, request, whether it held,
+    """``servo_loop._integrate``: the servo loop's δ, δ̇, δ̈, request, where the second
+    sole is held on the plane, whether it held,
     and whether every linear system on the way was regular (False: a step met a
     singular one, where numpy's minimum-norm solution is not LU's; the caller reruns
     the numpy twin).
@@ -208,9 +247,11 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
     n, dof = need.shape
     delta, rate = np.zeros((n, dof)), np.zeros((n, dof))
     accel, loop = np.zeros((n, dof)), np.zeros((n, dof))
+    held = np.zeros(n, dtype=np.bool_)
     m, c, kk = np.empty((dof, dof)), np.empty((dof, dof)), np.empty((dof, dof))
     force, raw = np.empty(dof), np.empty(dof)
     v = np.zeros(dof)
+    trailing = False  # the sole lifting off is still on the plane, loaded
     for k in range(n):
         h = dt[k]
         if k and stance[k] != stance[k - 1]:
@@ -218,18 +259,23 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
         _terms(
             k, mass, gravity_k, velocity_c, need, qd_ref, tau_ff, gains, d, v, m, c, kk, force, raw
         )
-        v, d, a, ok = _step(m, c, kk, force, d, v, h, jac[k], both[k] and h > 0)
+        if trailing and not both[k] and h > 0:
+            v, d, a, ok, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k])
+        else:
+            v, d, a, ok = _step(m, c, kk, force, d, v, h, jac[k], both[k] and h > 0)
+            trailing = both[k]
+        held[k] = trailing
         if not ok:
-            return delta, rate, accel, loop, True, False
+            return delta, rate, accel, loop, held, True, False
         if _let_go(d):
             for r in range(k, n):
                 for i in range(dof):
                     delta[r, i], rate[r, i] = delta[k - 1, i], 0.0
                     accel[r, i], loop[r, i] = 0.0, loop[k - 1, i]
-            return delta, rate, accel, loop, False, True
+            return delta, rate, accel, loop, held, False, True
         for i in range(dof):
             delta[k, i], rate[k, i], accel[k, i], loop[k, i] = d[i], v[i], a[i], raw[i]
-    return delta, rate, accel, loop, True, True
+    return delta, rate, accel, loop, held, True, True
 
 
 @njit(**_KW)

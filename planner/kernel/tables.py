@@ -27,6 +27,7 @@ from scipy.interpolate import CubicSpline
 
 from slopewalk.planner.joints import LEFT, RIGHT
 from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.sole import MAX_SOLE_VERTICES, edge_normals, outline
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.trajectory import Timeline
 
@@ -44,6 +45,19 @@ HZ, LIFT_X, TILT_X, PELVIS, STEP_LENGTH, SWAY_SHARE = range(6)
 COLUMNS = 6
 # geometry vector
 SHANK, THIGH, HIP_WIDTH, ANKLE_HEIGHT, HEEL, TOE, HALF_WIDTH, SOLE_OFFSET, KNEE_OFFSET = range(9)
+# then the sole (``sole.outline``): its vertex count M, 1.0 if it is the spec's rectangle
+# (no ``sole_polygon``: the SSP margin in closed form), the vertices about the sole's
+# centre x0, y0, x1, … and the outward unit normals of edges k → k+1, each padded with
+# zeros to ``sole.MAX_SOLE_VERTICES``.
+# The room is a literal here, not ``sole.MAX_SOLE_VERTICES`` read at compile time: the
+# kernel's cache keys on the kernel's own files (``cache``), so a constant the compiled
+# code freezes must live in one of them; the two are held equal on import.
+MAX_VERTICES = 8
+assert MAX_VERTICES == MAX_SOLE_VERTICES, "planner/sole.py and planner/kernel/tables.py"
+SOLE_COUNT, SOLE_RECTANGLE = 9, 10
+SOLE_XY = 11
+SOLE_NORMAL = SOLE_XY + 2 * MAX_VERTICES
+GEOMETRY = SOLE_NORMAL + 2 * MAX_VERTICES
 # A block (``Blocks``): at most BLOCK samples, in rows of BLOCK floats per input: the
 # sample's time [s], then its piece's floats (T0, T1, STANCE_X, TOWARDS, the shapes:
 # the same columns as ``GaitTable.floats``, T1 replaced by the time), its stance side
@@ -192,7 +206,8 @@ class ChainTable:
         geometry: shank, thigh, hip width, ankle height, heel, toe [m], half foot width [m],
             sole offset [m] (the sole's centre outward of the ankle, ``RobotSpec.sole_offset``),
             knee offset [m] (the knee ahead of the hip–ankle line, ``RobotSpec.knee_offset``:
-            the DH rows' b, ``kinematics.Chain.b``, and the IK's effective links).
+            the DH rows' b, ``kinematics.Chain.b``, and the IK's effective links), then the
+            sole polygon (``SOLE_COUNT``, ``SOLE_RECTANGLE``, ``SOLE_XY``, ``SOLE_NORMAL``).
         a: DH a_{i-1} [m], (8,). d5: DH d of the swing hip row per stance side [m], (2,).
         mass: Link masses of DH frames 0..8 [kg], (9,).
         com: Link CoMs in their DH frame [m], (2, 9, 3).
@@ -220,6 +235,10 @@ class ChainTable:
         diagonal = np.einsum("kii->ki", chain.inertia[0])
         off = chain.inertia[0] - np.einsum("ki,ij->kij", diagonal, np.eye(3))
         assert np.abs(off).max() <= 1e-12 * diagonal.max()
+        sole = outline(spec)
+        room = np.zeros((2, MAX_VERTICES, 2))
+        room[0, : len(sole)], room[1, : len(sole)] = sole, edge_normals(sole)
+        shape = [len(sole), float(spec.sole_polygon is None)]
         geometry = np.array(
             [
                 spec.shank,
@@ -231,6 +250,8 @@ class ChainTable:
                 spec.foot_width / 2,
                 spec.sole_offset,
                 spec.knee_offset,
+                *shape,
+                *room.reshape(-1),
             ]
         )
         return cls(

@@ -92,20 +92,25 @@ def test_compiled_linearisation_is_the_numpy_one(plan):
 
 
 @pytest.mark.parametrize("limit", [np.inf, 0.3])
-def test_compiled_servo_walk_is_the_numpy_one(spec, plan, limit):
-    """The AX-12A loop with feedforward; at 0.3 N m its output clips (the clipped rows)."""
+@pytest.mark.parametrize("share", [0.5, 0.0])
+def test_compiled_servo_walk_is_the_numpy_one(spec, plan, limit, share):
+    """The AX-12A loop with feedforward (``share`` of the torque; none: the trailing sole
+    stays loaded after lift-off, ``_trailing``); at 0.3 N m its output clips."""
     kw = dict(
         stiffness=spec.stiffness,
         velocity_gain=0.05,
         damping=spec.stall_torque / spec.no_load_speed,
         armature=spec.armature,
         force_limit=limit,
-        feedforward=0.5 * plan.tau,
+        feedforward=share * plan.tau if share else None,
     )
     got = servo_loop.servo_walk(plan, **kw)
     want = servo_loop.servo_walk(plan, compiled=False, **kw)
     assert np.isfinite(limit) == (np.abs(want.loop_torque) > limit).any()
     assert got.converged == want.converged
+    np.testing.assert_array_equal(got.held, want.held)
+    if not share:
+        assert (want.held & ~plan.double_support).any()  # a lifting sole held: _trailing ran
     np.testing.assert_allclose(got.deflection, want.deflection, rtol=0, atol=1e-8)
     np.testing.assert_allclose(got.plan.zmp, want.plan.zmp, rtol=0, atol=1e-8)
     np.testing.assert_allclose(got.loop_torque, want.loop_torque, rtol=0, atol=1e-6)

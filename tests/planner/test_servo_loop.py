@@ -101,3 +101,31 @@ def test_double_support_holds_the_second_sole(spec, plan):
 def test_bad_gains_name_the_value(plan, kw):
     with pytest.raises(SlopewalkError, match="must be > 0"):
         servo_walk(plan, **kw)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("push", [20.0, 5.0])
+def test_a_lifting_sole_stays_on_the_plane_while_the_plane_pushes_it(compiled, push):
+    """Hand-derived: four joints that are the sole's held rows (J = I), unit mass, no
+    stiffness or damping, at rest; the plan lifts the sole at 10 mm/s and the loop presses
+    it down with ``push`` N. Held, v' = −q̇_ref and the plane's force is λ_z = m a − f =
+    −0.01 / h + push: 10 N at 20 N of push (held), −5 N at 5 N (it would have to pull:
+    the free step, a = f)."""
+    from slopewalk.planner.kernel import servo
+    from slopewalk.planner.servo_loop import _trailing
+
+    h, dof = 1e-3, 4
+    eye, zero = np.eye(dof), np.zeros((dof, dof))
+    force = np.array([0.0, -push, 0.0, 0.0])
+    lift = np.array([0.0, 0.01, 0.0, 0.0])
+    still = np.zeros(dof)
+    if compiled:
+        v, d, a, ok, pushed = servo._trailing(eye, zero, zero, force, still, still, h, eye, lift)
+        assert ok
+    else:
+        v, d, a, pushed = _trailing(eye, zero, zero, force, still, still, h, eye, lift)
+    held = -0.01 / h + push > 0
+    assert pushed == held
+    want = -lift if held else h * force
+    np.testing.assert_allclose(v, want, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(d, h * want, rtol=0, atol=1e-15)

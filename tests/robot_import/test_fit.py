@@ -13,8 +13,10 @@ import pytest
 from slopewalk.bench.cli import main
 from slopewalk.bench.robot_import.fit import fit_model
 from slopewalk.bench.robot_import.mapfile import RobotImportError, RobotMap, load_map
-from slopewalk.bench.robot_import.write import imported_spec
+from slopewalk.bench.robot_import.write import imported_spec, spec_toml
+from slopewalk.planner.sole import outline
 from slopewalk.planner.spec import load_spec
+from slopewalk.planner.zmp import signed_margin, sole_vertices, support_polygon
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 WALKER = (ROBOTS / "walker.xml").read_text()
@@ -185,3 +187,58 @@ def test_sole_footprint_of_a_mesh_heel_is_its_lowest_vertices(tmp_path):
     assert len(foot.vertices) == 6 and not foot.bounded
     assert foot.area == pytest.approx(8.6e-3, rel=1e-7)
     assert {(-60.0, -3.0), (-60.0, 27.0)} <= set(map(tuple, (foot.vertices * 1e3).round(4)))
+
+
+def test_a_symmetric_footprint_is_written_as_the_sole_polygon(tmp_path):
+    """The narrowed heel's hexagon (symmetric about y = 12 mm) becomes geometry.sole_polygon
+    (the left sole's, from the ankle), read back by the planner; its support polygon in
+    single support is that hexagon around the sole point, and a ZMP in the empty heel
+    corner (−55, −18) mm, inside the rectangle, is outside it: below the slanted edge
+    y = −23 − x/6 mm by 25/6 mm, at the distance (25/6)/√(1 + 1/36) = 25/√37 mm."""
+    narrow = '<geom class="sole" size="0.03 0.025 0.005" pos="-0.03 {} -0.035"/>'
+    fit = _fitted(tmp_path, [HEEL, RIGHT_HEEL], [narrow.format(0.012), narrow.format(-0.012)])
+    data, notes = imported_spec(fit, RobotMap())
+    hexagon = np.array([[80, -23], [80, 47], [0, 47], [-60, 37], [-60, -13], [0, -23]]) * 1e-3
+    polygon = np.array(data["geometry"]["sole_polygon"])
+    start = int(np.argmin(np.hypot(*(polygon - hexagon[0]).T)))
+    np.testing.assert_allclose(np.roll(polygon, -start, axis=0), hexagon, atol=1e-12)
+    path = tmp_path / "walker.toml"
+    path.write_text(spec_toml(data, []))
+    spec = load_spec(path)
+    assert spec.sole_offset == pytest.approx(0.012, abs=1e-12)
+    assert "written as geometry.sole_polygon" in next(n for n in notes if "footprint" in n)
+    sole = sole_vertices(np.zeros((1, 2)), outline(spec), spec.sole_shift(0))
+    margin = signed_margin(
+        np.array([[-0.055, -0.018]]), support_polygon(sole, sole, np.zeros(1, bool))
+    )
+    np.testing.assert_allclose(margin, [-0.025 / np.sqrt(37)], rtol=0, atol=1e-12)
+
+
+def test_a_rectangle_or_asymmetric_footprint_keeps_the_rectangle(tmp_path):
+    """walker.xml's two equal-width boxes: the footprint is the rectangle, no polygon (the
+    spec as before the key). A heel box narrowed on its inner side only (y 0..37 mm): not
+    symmetric about the centre line (13 mm off), the rectangle kept and said so."""
+    data, notes = imported_spec(fit_model(ROBOTS / "walker.xml"), RobotMap())
+    assert "sole_polygon" not in data["geometry"]
+    assert "(the footprint is the rectangle)" in next(n for n in notes if "footprint" in n)
+    lopsided = '<geom class="sole" size="0.03 0.0185 0.005" pos="-0.03 {} -0.035"/>'
+    fit = _fitted(tmp_path, [HEEL, RIGHT_HEEL], [lopsided.format(0.0185), lopsided.format(-0.0185)])
+    data, notes = imported_spec(fit, RobotMap())
+    assert "sole_polygon" not in data["geometry"]
+    line = next(n for n in notes if "footprint" in n)
+    assert "not symmetric about its centre line (13 mm off)" in line, line
+
+
+def test_a_mesh_heels_footprint_is_symmetrised_to_the_last_bit(tmp_path):
+    """The wedge heel (float32 mesh vertices, ~1e-9 m off): written symmetric exactly."""
+    wedge = ("-0.06 -0.003 0  -0.06 0.027 0  0 -0.023 0  0 0.047 0  "
+             "-0.06 -0.003 0.01  -0.06 0.027 0.01  0 -0.023 0.01  0 0.047 0.01")  # fmt: skip
+    mesh = '<geom type="mesh" mesh="heel" class="sole" pos="0 0 -0.04"/>'
+    asset = f'<asset><mesh name="heel" vertex="{wedge}"/></asset>\n  <worldbody>'
+    fit = _fitted(tmp_path, [HEEL, "<worldbody>"], [mesh, asset])
+    data, _ = imported_spec(fit, RobotMap())
+    polygon = np.array(data["geometry"]["sole_polygon"])
+    centre = data["geometry"]["sole_offset"]
+    mirror = polygon * [1, -1] + [0, 2 * centre]
+    assert np.abs(mirror[:, None] - polygon[None]).max(axis=2).min(axis=1).max() < 1e-15
+    assert {(-60.0, -3.0), (-60.0, 27.0)} <= set(map(tuple, (polygon * 1e3).round(4)))
