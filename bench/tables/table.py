@@ -343,10 +343,14 @@ def model_format(fmt: TableFormat) -> TableFormat:
     """``fmt`` of a run on an imported model (``sweep``/``envelope --model``): the model's
     columns after every other (``MODEL_COLUMNS``: its name and ``sha256:`` with the first
     digits of its files' digest), so each column of ``fmt`` keeps its place; the table of
-    the same run on the twin is refused as such."""
+    the same run on the twin is refused as such, and a finished table of an older version
+    on a model (``fmt``'s previous layouts with the model's columns) may be replaced."""
     why = "its rows were played on the spec's twin, not on a model"
     return replace(
-        fmt, columns=(*fmt.columns, *MODEL_COLUMNS), siblings=((fmt.columns, why), *fmt.siblings)
+        fmt,
+        columns=(*fmt.columns, *MODEL_COLUMNS),
+        siblings=((fmt.columns, why), *fmt.siblings),
+        previous_layouts=tuple((*old, *MODEL_COLUMNS) for old in fmt.previous_layouts),
     )
 
 

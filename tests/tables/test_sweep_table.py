@@ -128,3 +128,19 @@ def test_a_committed_sweep_row_is_regenerated_byte_for_byte_from_its_trial():
     (trial,) = [t for t in load_sweep(root / "bench/experiments/sweeps/paper.toml").trials
                 if t.trial_id == trial_id]  # fmt: skip
     assert format_row(run_one(trial)) == rows[trial_id]
+
+
+def test_a_model_sweep_of_an_older_version_may_be_replaced_not_resumed(tmp_path):
+    """A finished sweep on a model in an older layout (before the strict walk columns) is an
+    older version's table, which a fresh run replaces; the twin's table stays refused."""
+    from slopewalk.bench.tables.sweep import _BEFORE_WALK, SWEEP
+    from slopewalk.bench.tables.table import MODEL_COLUMNS, TableError, model_format
+
+    fmt = model_format(SWEEP)
+    old = (",".join((*_BEFORE_WALK, *MODEL_COLUMNS)) + "\n").encode()
+    rows, _ = fmt.parse(old, tmp_path / "sweep.csv", previous_ok=True)
+    assert rows == {}
+    with pytest.raises(TableError, match="older slopewalk"):
+        fmt.parse(old, tmp_path / "sweep.csv")
+    with pytest.raises(TableError, match="played on the spec's twin"):
+        fmt.parse(SWEEP.header, tmp_path / "sweep.csv", previous_ok=True)
