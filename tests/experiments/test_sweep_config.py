@@ -184,14 +184,16 @@ def test_trial_id_is_the_hash_of_the_inputs_and_the_spec(tmp_path, short_robot):
             "seed": trial.seed,
             "timestep": TIMESTEP,
             # every field, but the optional geometry keys at their default (sole_offset,
-            # knee_offset 0) left out, so the ids of robots written before them do not move
+            # knee_offset 0, no sole_polygon) left out, so the ids of robots written before
+            # them do not move
             "spec": {
                 k: v
                 for k, v in asdict(trial.spec).items()
-                if k not in ("sole_offset", "knee_offset")
+                if k not in ("sole_offset", "knee_offset", "sole_polygon")
             },
         }
         assert trial.spec.sole_offset == 0.0 and trial.spec.knee_offset == 0.0
+        assert trial.spec.sole_polygon is None
         text = json.dumps(key, sort_keys=True, default=float)
         assert trial.trial_id == hashlib.sha256(text.encode()).hexdigest()[:12]
 
