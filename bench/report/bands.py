@@ -150,7 +150,9 @@ def played_lines(played: list[dict]) -> list[str]:
         "searches, the max-margin gait re-planned at 1 ms and played open loop in every "
         "actuator mode, with the spec as changed; its margin pools both searches, so it may "
         "exceed the table's), for the value that moves each boundary most (or its margin, "
-        "when none moves it a cell):",
+        "when none moves it a cell); the balance verdict, and in brackets the strict walk "
+        "verdict where it differs (`walked` needs the plan walked within the servo's stall "
+        "torque, `docs/verdicts.md`):",
         "",
         "| family | boundary | spec | cell | margin | " + " | ".join(modes) + " |",
         "|---|---|---|---|---|" + "---|" * len(modes),

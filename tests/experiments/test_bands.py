@@ -130,3 +130,24 @@ def test_the_command_refuses_a_bad_range_or_no_table_in_one_line(tmp_path, capsy
     err = _refused(["bands", "--robot", str(plain), "--out", str(tmp_path / "o")], capsys)
     assert "no [uncertain] table" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_boundary_gaits_verdict_shows_the_strict_walk_where_it_differs():
+    """bands.md's MuJoCo table: the balance verdict and, in brackets, the strict one ("stable
+    (overload)", "stable (walked)"); the balance verdict alone where the walk fails with it
+    (a tip is a tip) or the table is older than the walk columns."""
+    from slopewalk.bench.experiments.envelope.bands import _verdicts
+
+    row = {
+        "maxmargin_stiff_verdict": "stable",
+        "maxmargin_stiff_walk": "overload",
+        "maxmargin_servo_verdict": "stable",
+        "maxmargin_servo_walk": "walked",
+        "maxmargin_servo_ff_verdict": "tip",
+        "maxmargin_servo_ff_walk": "tip",
+        "maxmargin_stiff_ff_verdict": "stable",
+    }
+    assert _verdicts(row, "stiff") == "stable (overload)"
+    assert _verdicts(row, "servo") == "stable (walked)"
+    assert _verdicts(row, "servo_ff") == "tip"
+    assert _verdicts(row, "stiff_ff") == "stable"  # a table written before the walk columns

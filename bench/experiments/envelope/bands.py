@@ -228,9 +228,9 @@ class Play:
 def play_cell(play: Play) -> dict:
     """The envelope's own cell (``run_cell``: both searches, the 1 ms re-plan, every actuator
     mode of the envelope) at a boundary, with the job's spec; the max-margin gait's row:
-    its margin [mm] and its simulated verdict per mode."""
+    its margin [mm] and its simulated verdicts per mode: balance, and the strict walk
+    verdict in brackets where it is not the balance one (``docs/verdicts.md``)."""
     from slopewalk.bench.experiments.envelope.cell import run_cell
-    from slopewalk.bench.tables.envelope import sim_columns
 
     job = play.job
     t, s = job.cells[play.index]
@@ -248,8 +248,16 @@ def play_cell(play: Play) -> dict:
         "step_time": t,
         "slope_deg": s,
         "margin_mm": float(row["maxmargin_margin_mm"]),
-        "verdicts": {m: row[sim_columns("maxmargin", m)[0]] for m in cell.modes},
+        "verdicts": {m: _verdicts(row, m) for m in cell.modes},
     }
+
+
+def _verdicts(row: dict, mode: str) -> str:
+    """ "stable (overload)": the balance verdict, and the strict walk one where it differs."""
+    from slopewalk.bench.tables.envelope import sim_columns, walk_column
+
+    balance, walk = row[sim_columns("maxmargin", mode)[0]], row.get(walk_column("maxmargin", mode))
+    return balance if walk in (None, "", balance) else f"{balance} ({walk})"
 
 
 def play_boundaries(
