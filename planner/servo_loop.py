@@ -151,13 +151,19 @@ def _landed(mass, jac, rate):
     return rate - mj @ (np.linalg.pinv(jac @ mj) @ speed)
 
 
+def _system(m, c, kk, force, d, v, h):
+    """The backward-Euler step's system (m + h c + h² kk) a = force − c v − kk (δ + h v):
+    (matrix, rhs)."""
+    return m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+
+
 def _backward_euler(m, c, kk, force, d, v, h, jac):
     """One step of m a + c v' + kk δ' = force: v' = v + h a, δ' = δ + h v'; (v', δ', a).
 
     ``jac``: the held rows of the second sole's Jacobian where it stops and stays
     (J v' = 0, after ``_landed``), or None.
     """
-    matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+    matrix, rhs = _system(m, c, kk, force, d, v, h)
     if jac is not None:
         v = _landed(m, jac, v)
         rhs = force - c @ v - kk @ (d + h * v)
@@ -179,7 +185,7 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
     Where the plane would have to pull (λ_z ≤ 0) the sole has left it, and the step is
     the free one.
     """
-    matrix, rhs = m + h * c + h * h * kk, force - c @ v - kk @ (d + h * v)
+    matrix, rhs = _system(m, c, kk, force, d, v, h)
     a, wrench = _constrained(matrix, rhs, jac, -jac @ (qd_ref + v) / h, wrench=True)
     if not wrench[NORMAL] > 0.0:
         return (*_backward_euler(m, c, kk, force, d, v, h, None), False)

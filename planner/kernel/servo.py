@@ -133,13 +133,10 @@ def _landed(mass, jac, rate):
 
 
 @njit(**_KW)
-def _step(m, c, kk, force, d, v, h, jac, held):
-    """``servo_loop._backward_euler``: (v', δ', a) of one step, and whether every system
-    solved was regular; ``held``: the sole held."""
+def _system(m, c, kk, force, d, v, h):
+    """The backward-Euler step's system (m + h c + h² kk) a = force − c v − kk (δ + h v)
+    (``servo_loop._system``): (matrix, rhs)."""
     dof = d.shape[0]
-    ok = True
-    if held:
-        v, ok = _landed(m, jac, v)
     ahead = np.empty(dof)
     for i in range(dof):
         ahead[i] = d[i] + h * v[i]
@@ -149,6 +146,18 @@ def _step(m, c, kk, force, d, v, h, jac, held):
         rhs[i] = force[i] - cv[i] - kd[i]
         for k in range(dof):
             matrix[i, k] = m[i, k] + h * c[i, k] + h * h * kk[i, k]
+    return matrix, rhs
+
+
+@njit(**_KW)
+def _step(m, c, kk, force, d, v, h, jac, held):
+    """``servo_loop._backward_euler``: (v', δ', a) of one step, and whether every system
+    solved was regular; ``held``: the sole held."""
+    dof = d.shape[0]
+    ok = True
+    if held:
+        v, ok = _landed(m, jac, v)
+    matrix, rhs = _system(m, c, kk, force, d, v, h)
     if held:
         target = _mv(jac, v, np.empty(jac.shape[0]))
         for r in range(jac.shape[0]):
@@ -172,16 +181,10 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
     J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0); (v', δ',
     a, whether every system was regular, whether the plane still pushes)."""
     dof = d.shape[0]
-    ahead, lifted = np.empty(dof), np.empty(dof)
+    lifted = np.empty(dof)
     for i in range(dof):
-        ahead[i] = d[i] + h * v[i]
         lifted[i] = qd_ref[i] + v[i]
-    cv, kd = _mv(c, v, np.empty(dof)), _mv(kk, ahead, np.empty(dof))
-    matrix, rhs = np.empty((dof, dof)), np.empty(dof)
-    for i in range(dof):
-        rhs[i] = force[i] - cv[i] - kd[i]
-        for k in range(dof):
-            matrix[i, k] = m[i, k] + h * c[i, k] + h * h * kk[i, k]
+    matrix, rhs = _system(m, c, kk, force, d, v, h)
     target = _mv(jac, lifted, np.empty(jac.shape[0]))
     for r in range(jac.shape[0]):
         target[r] = -target[r] / h
