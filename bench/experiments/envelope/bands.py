@@ -108,6 +108,12 @@ class Job:
     cell: EnvelopeCell
     spec: RobotSpec
 
+    def identity(self) -> dict:
+        """The columns that name this search in a result row: family, boundary, key, end,
+        value."""
+        return {"family": self.family, "boundary": self.boundary, "key": self.key,
+                "end": self.end, "value": self.value}  # fmt: skip
+
 
 def run_job(job: Job) -> dict:
     """Walk one boundary (``walk``); its row: the boundary's grid value (None: no cell
@@ -132,12 +138,7 @@ def run_job(job: Job) -> dict:
     first = min(max(job.start, 0), len(job.cells) - 1)
     anchor = max(i, 0) if job.key == NOMINAL else first
     coordinate = 0 if job.boundary == "flat" else 1
-    return {
-        "family": job.family,
-        "boundary": job.boundary,
-        "key": job.key,
-        "end": job.end,
-        "value": job.value,
+    return job.identity() | {
         "index": i,
         "at": job.cells[i][coordinate] if i >= 0 else None,
         "edge": i == len(job.cells) - 1,
@@ -239,12 +240,7 @@ def play_cell(play: Play) -> dict:
     row = run_cell(cell)
     if is_failure(row.get("error")):
         raise EnvelopeError(f"{cell.label} ({job.key} {job.end}): {row['error']}")
-    return {
-        "family": job.family,
-        "boundary": job.boundary,
-        "key": job.key,
-        "end": job.end,
-        "value": job.value,
+    return job.identity() | {
         "step_time": t,
         "slope_deg": s,
         "margin_mm": float(row["maxmargin_margin_mm"]),
