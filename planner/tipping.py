@@ -255,7 +255,7 @@ def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rocking(
-    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None
+    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None, props=None
 ) -> np.ndarray:
     """Signed tilt of the robot on its support about ``axis``'s lines [rad], (n,) (module doc).
 
@@ -266,6 +266,8 @@ def rocking(
         clearance: Swing sole height over the plane [m], (n,); default the plan's.
         floor_stiffness: k_c of each sole corner on the soft floor [N/m], > 0; None: rigid.
         moments: The plan's ``LinkMoments``, if already computed.
+        props: A boolean array (n,) or None; where given, the samples at which the swing
+            sole props the rotation (the module doc's prop) are set True in it.
 
     Returns:
         θ + θ_g: the lift about the pivot line plus the floor's give.
@@ -321,6 +323,8 @@ def rocking(
             beyond = (reach_high[k] - upper[k]) if x > 0 else (lower[k] - reach_low[k])
             if beyond > 0.0 and abs(x) * beyond > height[k]:
                 x = np.copysign(height[k] / beyond, x)
+                if props is not None:
+                    props[k] = True
                 v = min(v, 0.0) if x > 0 else max(v, 0.0)
                 if x == 0.0:
                     v = 0.0
@@ -329,7 +333,7 @@ def rocking(
     return theta
 
 
-def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None) -> np.ndarray:
+def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None, props=None) -> np.ndarray:
     """Predicted tilt of the support off the plane [rad], (n,): √(roll² + pitch²), ≤ FALLEN.
 
     Args:
@@ -337,8 +341,10 @@ def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None) -> np.nd
         zmp: The ZMP series to judge, (n, 2) [m]; default the plan's own.
         clearance: Swing sole height over the plane [m], (n,); default the plan's.
         floor_stiffness: k_c of each sole corner [N/m]; None: a rigid floor.
+        props: Boolean (n,) or None: where given, marks the samples at which the swing
+            sole props the roll or the pitch (``rocking``).
     """
     moments = LinkMoments(plan)
-    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments)
-    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments)
+    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments, props)
+    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments, props)
     return np.minimum(np.hypot(roll, pitch), FALLEN)

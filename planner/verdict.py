@@ -13,6 +13,18 @@ the analytic series, with the simulator's own thresholds (defined here, used by
 * ``strike``: the swing sole of the walk actually made (compliance-aware) would
   go into the plane in single support; the plane props the robot up and turns
   the stance foot about its far edge (``strike.strike_roll``) past ``TIP_ANGLE``.
+* ``swing_drag``: the swing sole props the support's rocking (``tipping.rocking``:
+  the robot turns towards the swing sole until it meets the plane) while the plan
+  carries it along the plane. Propping, it holds the robot up, so it is loaded; the
+  plan moves it on at the swing's speed, so it is dragged loaded over the plane, which
+  is the simulator's ``slip`` of that foot past ``SLIP_DISTANCE``, and the friction
+  that catches it trips the robot. Predicted where the planned swing sole travels more
+  than ``SLIP_DISTANCE`` within one run of propped samples (its distance from where
+  the run began, as the simulator measures a loaded sole's slide). Designed on the
+  design GA set (``bench/experiments/envelopes/ga-dev.toml``: GA gaits with a swing
+  lift of 7–14 mm at 0.35–0.75 s, whose low soles prop the rocking and catch; the
+  predicted verdict there 75.2 → 88.3 %), random-dev and the development grids
+  (unchanged there, but for one random-dev trial).
 * ``slip``: where the required friction |F_t|/F_n exceeds μ the ground holds only
   μ F_n; the rest, |F_t| − μ F_n, slides the robot (mass m) along the plane. The
   slide is integrated like the tip rotation and ``slip`` predicted past
@@ -44,7 +56,7 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   as MuJoCo's falls.
 
 Verdict: the most severe predicted event of ``VERDICT_KINDS``, in the order
-joint_limit, tip, strike, slip, foot_slide; ``stable`` when none.
+joint_limit, tip, strike, swing_drag, slip, foot_slide; ``stable`` when none.
 """
 
 from __future__ import annotations
@@ -66,7 +78,9 @@ TIP_ANGLE = np.deg2rad(5.0)  # [rad]
 
 # The paper's verdict: its ZMP test on the planned walk (``Plan.stable``).
 PAPER_VERDICTS = ("stable", "zmp_outside")
-PREDICTED_KINDS = ("joint_limit", "saturation", "tip", "strike", "slip", "foot_slide")
+PREDICTED_KINDS = (
+    "joint_limit", "saturation", "tip", "strike", "swing_drag", "slip", "foot_slide"
+)  # fmt: skip
 VERDICT_KINDS = tuple(k for k in PREDICTED_KINDS if k != "saturation")
 SEVERITY = {kind: len(VERDICT_KINDS) - i for i, kind in enumerate(VERDICT_KINDS)}
 
@@ -115,7 +129,7 @@ def joint_limit_events(plan) -> list[PredictedEvent]:
 
 
 def tip_events(
-    plan, zmp=None, *, clearance=None, floor_stiffness=None
+    plan, zmp=None, *, clearance=None, floor_stiffness=None, props=None
 ) -> tuple[list[PredictedEvent], np.ndarray]:
     """``tip`` where the support's tilt passes TIP_ANGLE; and the tilt [rad], (n,).
 
@@ -124,8 +138,10 @@ def tip_events(
         zmp: Its ZMP series, (n, 2) [m]; default the plan's.
         clearance: Swing sole height [m], (n,), for the swing sole's prop; default the plan's.
         floor_stiffness: Sole-corner stiffness of the soft floor [N/m]; None: rigid.
+        props: Boolean (n,) or None: where given, marks the samples at which the swing
+            sole props the rocking (``tipping.foot_rotation``).
     """
-    theta = foot_rotation(plan, zmp, clearance, floor_stiffness)
+    theta = foot_rotation(plan, zmp, clearance, floor_stiffness, props)
     return _first_past(
         plan.t,
         theta,
@@ -136,6 +152,32 @@ def tip_events(
             f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
         ),
     ), theta
+
+
+def swing_drag_events(plan, props: np.ndarray) -> list[PredictedEvent]:
+    """``swing_drag`` where the swing sole travels past SLIP_DISTANCE while it props.
+
+    Args:
+        plan: The planned walk (its swing sole's path on the plane, ``swing_sole``).
+        props: Boolean (n,): the samples at which the swing sole props the rocking
+            (``tip_events``' ``props``).
+    """
+    edges = np.diff(np.concatenate([[0], props.astype(np.int8), [0]]))
+    xy = plan.swing_sole[:, :2]
+    for start, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        moved = np.hypot(*(xy[start:end] - xy[start]).T)
+        past = np.flatnonzero(moved > SLIP_DISTANCE)
+        if past.size:
+            k = start + int(past[0])
+            return [
+                PredictedEvent(
+                    float(plan.t[k]),
+                    "swing_drag",
+                    f"the swing sole props the rocking from {plan.t[start]:.3f} s and the "
+                    f"plan carries it {moved.max() * 1e3:.1f} mm along the plane meanwhile",
+                )
+            ]
+    return []
 
 
 def slip_events(plan, friction: float) -> tuple[list[PredictedEvent], np.ndarray]:
@@ -324,15 +366,17 @@ def predict(
             dragged sole stays loaded per stretch (``foot_slide``); None: a rigid floor.
 
     The swing sole's prop uses the planned clearance: where the servos' sag puts the
-    reached walk's sole into the plane, that is ``strike``'s case, not a prop.
+    reached walk's sole into the plane, that is ``strike``'s case, not a prop; the
+    planned sole's travel while it props decides ``swing_drag``.
     """
     made = plan if walk is None else walk.plan
     events = joint_limit_events(plan) + foot_slide_events(plan, contact_time)
+    props = np.zeros(plan.t.size, dtype=bool)
     tips, rotation = tip_events(
-        made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness
+        made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness, props=props
     )
     slips, slide = slip_events(made, friction)
-    events += tips + slips
+    events += tips + swing_drag_events(plan, props) + slips
     if walk is not None:
         if stiffness is None:
             raise SlopewalkError(

@@ -10,7 +10,7 @@ Three predictions sit side by side (``TrialPrediction``):
 * the predicted verdict: the most severe event ``slopewalk.planner.verdict.predict`` finds on
   the walk the servo loop makes through time (``planner.servo_loop``: its sway, the
   closed chain of double support, the output clipped at the torque limit):
-  joint_limit, tip, strike, slip, foot_slide, or ``stable``; ``saturation`` (the loop
+  joint_limit, tip, strike, swing_drag, slip, foot_slide, or ``stable``; ``saturation`` (the loop
   asking for more than its limit, on the static walk) is reported beside them.
 
 The servo is the trial's actuator mode (``model.servo_settings``), and in a

@@ -1,6 +1,8 @@
-"""Predicted events: joint limits, the planned foot slide, slip beyond μ, severity order."""
+"""Predicted events: joint limits, the planned foot slide, slip beyond μ, the propping
+swing sole's drag, severity order."""
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -20,6 +22,8 @@ from slopewalk.planner.verdict import (
     saturation_events,
     slip_events,
     stretch_slide,
+    swing_drag_events,
+    tip_events,
     verdict,
 )
 
@@ -154,3 +158,48 @@ def test_saturation_names_the_first_sample_and_the_neediest_joint(spec, plan):
     assert event.time == pytest.approx(plan.t[first])
     assert event.cause.startswith(f"{JOINT_NAMES[neediest]} asks for {peak[neediest]:.2f} N m")
     assert saturation_events(walk, 1.01 * peak.max()) == []
+
+
+def _sole_path(moves_mm, props):
+    """A walk whose swing sole moves by ``moves_mm`` [mm] along x between samples (1 ms)."""
+    x = np.concatenate([[0.0], np.cumsum(moves_mm)]) * 1e-3
+    sole = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    return SimpleNamespace(t=np.arange(x.size) * 1e-3, swing_sole=sole), np.array(props)
+
+
+def test_a_swing_sole_dragged_past_the_slip_distance_while_propping_is_swing_drag():
+    # one run of 4 propped samples; the sole moves 2 mm per sample: 6 mm from where
+    # the run began at its 4th sample (index 4), the first past 5 mm
+    walk, props = _sole_path([1, 2, 2, 2, 2, 1], [0, 1, 1, 1, 1, 0, 0])
+    (event,) = swing_drag_events(walk, props)
+    assert event.kind == "swing_drag" and event.time == pytest.approx(4e-3)
+    # the same motion in two runs of 4 mm each: each run starts its own count
+    walk, props = _sole_path([2, 2, 2, 2, 2, 2], [1, 1, 1, 0, 1, 1, 1])
+    assert swing_drag_events(walk, props) == []
+    # a propped sole that stands still (or 5 mm exactly) is no drag
+    walk, props = _sole_path([0, 0, 2.5, 2.5, 0], [1, 1, 1, 1, 1, 1])
+    assert swing_drag_events(walk, props) == []
+    assert swing_drag_events(walk, np.zeros(6, dtype=bool)) == []
+    assert SLIP_DISTANCE == 0.005
+
+
+def test_a_low_swing_sole_props_the_rocking_in_single_support_and_is_dragged(spec):
+    # a GA-like gait (0.55 s, 27.5 deg, Hz 139 mm, 7.4 mm of swing lift): the support
+    # rocks towards the swing sole, which meets the plane and props it
+    gait = GaitParams.nominal(
+        spec, 0.55, slope=np.deg2rad(27.5), hip_height=0.1386608, swing_lift=0.0074092,
+        tilt=np.deg2rad(11.68377),
+    )  # fmt: skip
+    low = plan_walk(spec, gait)
+    props = np.zeros(low.t.size, dtype=bool)
+    _, theta = tip_events(low, props=props)
+    assert props.any() and not (props & low.double_support).any()  # single support only
+    np.testing.assert_array_equal(theta, tip_events(low)[1])  # props only reports
+    result = predict(low, friction=1.0)
+    assert result.verdict == "swing_drag"
+    # the same walk with its swing sole a metre up: nothing to prop on, no drag
+    high = replace(low, swing_sole=low.swing_sole + [0.0, 0.0, 1.0])
+    none = np.zeros(low.t.size, dtype=bool)
+    tip_events(high, props=none)
+    assert not none.any()
+    assert "swing_drag" not in [e.kind for e in predict(high, friction=1.0).events]
