@@ -42,7 +42,14 @@ until then (``_trailing``; ``CompliantWalk.held``). Measured in MuJoCo (default 
 planned lift-off, as before, the load jumped onto the stance leg in one step and rang
 the joint mode: on a random gait of the design draw (2 s, 10°, 15° lean) that swing put
 the ZMP 5 mm past the stance sole's inner edge and the predicted support tilt to 10.5°,
-where MuJoCo's CoP stays inside and its foot tilts 2.2°. Otherwise λ = 0 in single support.
+where MuJoCo's CoP stays inside and its foot tilts 2.2°. The plane holds the sole along
+itself by friction alone: where the hold would need a tangential force past the friction
+cone, |λ_x| > μ λ_z, the sole slides and is let go too (the free step). Without that
+bound, on GA gaits of the design set that carry the trailing sole back against a
+downhill lean (extended family, pelvis offset ≈ −100 mm, −12.5 … −27.5°), the hold
+lasted the whole single support with |λ_x| up to 700 N against λ_z of 4–500 N, the
+stiff loop fought it with 50 N m and the predictor called a tip of 90° where MuJoCo's
+robot walks with its soles tilting 0.2°. Otherwise λ = 0 in single support.
 Integrated by backward Euler on the plan's time base (1 ms: ω dt ≈ 0.02, numerical
 damping ω dt / 2 ≈ 0.01, small against ζ); a joint whose output is clipped gets the
 constant ±τ_max in its row. The walk returned (q_ref + δ and its rates and
@@ -175,19 +182,22 @@ def _backward_euler(m, c, kk, force, d, v, h, jac):
 
 
 NORMAL = HELD.index(2)  # the held rows' normal force (z of S) in λ
+TANGENT = HELD.index(0)  # and the force along the plane (x of S)
 
 
-def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
+def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """One step with the trailing sole kept where it is on the plane after lift-off, and
-    whether the plane still pushes it (λ_z > 0); (v', δ', a, pushed).
+    whether the plane still holds it; (v', δ', a, held).
 
     The plan lifts the sole at J q̇_ref; held, the sole stays put: J (q̇_ref + v') = 0.
-    Where the plane would have to pull (λ_z ≤ 0) the sole has left it, and the step is
-    the free one.
+    Where the plane would have to pull (λ_z ≤ 0) the sole has left it, and where it would
+    have to hold it along itself past the friction cone (|λ_x| > μ λ_z, μ ``friction``)
+    it slides; either way the step is the free one.
     """
     matrix, rhs = _system(m, c, kk, force, d, v, h)
     a, wrench = _constrained(matrix, rhs, jac, -jac @ (qd_ref + v) / h, wrench=True)
-    if not wrench[NORMAL] > 0.0:
+    normal = wrench[NORMAL]
+    if not (normal > 0.0 and abs(wrench[TANGENT]) <= friction * normal):
         return (*_backward_euler(m, c, kk, force, d, v, h, None), False)
     v = v + h * a
     return v, d + h * v, a, True
@@ -204,6 +214,7 @@ def servo_walk(
     feedforward: np.ndarray | None = None,
     closed_chain: bool = True,
     compiled: bool = True,
+    friction: float = np.inf,
 ) -> CompliantWalk:
     """The walk a servo loop makes, integrated through time (module doc).
 
@@ -221,6 +232,8 @@ def servo_walk(
         compiled: Linearise and integrate on the compiled kernel
             (``kernel.dynamics``, ``kernel.servo``); False: this module's numpy
             (``linearised``, ``support_jacobian``, ``_integrate``), the reference.
+        friction: μ of the plane, > 0: how far along itself it holds a trailing sole
+            (module doc); inf: without bound.
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
@@ -232,6 +245,8 @@ def servo_walk(
         raise SlopewalkError(f"stiffness {stiffness!r} N m/rad: must be > 0")
     if not force_limit > 0:
         raise SlopewalkError(f"force_limit {force_limit!r} N m: must be > 0")
+    if not friction > 0:
+        raise SlopewalkError(f"friction {friction!r}: must be > 0 (inf: no bound)")
     both = plan.double_support & closed_chain
     if compiled:
         tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
@@ -249,7 +264,9 @@ def servo_walk(
     k0 = gravity_k[0] + stiffness * eye
     f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])
     d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
-    gains = tuple(float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit))
+    gains = tuple(
+        float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit, friction)
+    )
     dt = np.diff(plan.t, prepend=plan.t[0])
     args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
     solved = _integrate_compiled(*args, gains, d) if compiled else None
@@ -296,13 +313,13 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
         dt: Time step to each sample [s], (n,) (0 at the first).
         stance: Stance side per sample, (n,). both: The second sole held, (n,) bool.
         jac: Its held rows of the pose Jacobian, (n, 4, 8).
-        gains: (kp, kv, damping, armature, τ_max). d: δ at the first sample [rad], (8,).
+        gains: (kp, kv, damping, armature, τ_max, μ). d: δ at the first sample [rad], (8,).
 
     Returns:
         δ, δ̇, δ̈, the request (n, 8) each, where the second sole is held on the plane
         (n,) bool, and False where the loop let go (|δ| ≥ π).
     """
-    stiffness, velocity_gain, damping, armature, force_limit = gains
+    stiffness, velocity_gain, damping, armature, force_limit, friction = gains
     n, dof = need.shape
     eye = np.eye(dof)
     delta = np.zeros((n, dof))
@@ -326,7 +343,7 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
         force = held + np.where(free, tau_ff[k] - velocity_gain * qd_ref[k], 0.0) - need[k]
         if trailing and not both[k] and h > 0:
-            v, d, a, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k])
+            v, d, a, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k], friction)
         else:
             hold = both[k] and h > 0
             v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if hold else None)

@@ -83,7 +83,7 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
     )
     walk = compliant_walk(plan, **loop)
-    loop_walk = servo_walk(plan, force_limit=servo.force_limit, **loop)
+    loop_walk = servo_walk(plan, force_limit=servo.force_limit, friction=friction, **loop)
     scene = mujoco.MjModel.from_xml_string(
         scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
     )

@@ -173,13 +173,15 @@ def _step(m, c, kk, force, d, v, h, jac, held):
 
 
 _NORMAL = 1  # servo_loop.NORMAL: the normal force's row in λ (HELD = x, z, roll, pitch)
+_TANGENT = 0  # servo_loop.TANGENT: the force along the plane
 
 
 @njit(**_KW)
-def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
+def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """``servo_loop._trailing``: the step with the lifting sole kept on the plane,
-    J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0); (v', δ',
-    a, whether every system was regular, whether the plane still pushes)."""
+    J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0) or hold it
+    past the friction cone (|λ_x| > μ λ_z); (v', δ', a, whether every system was regular,
+    whether the plane still holds it)."""
     dof = d.shape[0]
     lifted = np.empty(dof)
     for i in range(dof):
@@ -191,7 +193,8 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
     a, wrench, good = _constrained(matrix, rhs, jac, target)
     if not good:
         return v, d, a, False, False
-    if not wrench[_NORMAL] > 0.0:
+    normal = wrench[_NORMAL]
+    if not (normal > 0.0 and abs(wrench[_TANGENT]) <= friction * normal):
         vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, False)
         return vn, dn, a, ok, False
     vn, dn = np.empty(dof), np.empty(dof)
@@ -204,7 +207,7 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
 @njit(**_KW)
 def _terms(k, mass, gravity_k, velocity_c, need, qd_ref, tau_ff, gains, d, v, m, c, kk, force, raw):
     """The step's matrices m, c, kk and force of ``servo_loop._integrate``, the request raw."""
-    kp, kv, damping, armature, limit = gains
+    kp, kv, damping, armature, limit = gains[0], gains[1], gains[2], gains[3], gains[4]
     dof = d.shape[0]
     for i in range(dof):
         raw[i] = -kp * d[i] - kv * (qd_ref[k, i] + v[i]) + tau_ff[k, i]
@@ -245,7 +248,7 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
     singular one, where numpy's minimum-norm solution is not LU's; the caller reruns
     the numpy twin).
 
-    gains: (kp, kv, damping, armature, τ_max); d: δ at the first sample (rest).
+    gains: (kp, kv, damping, armature, τ_max, μ); d: δ at the first sample (rest).
     """
     n, dof = need.shape
     delta, rate = np.zeros((n, dof)), np.zeros((n, dof))
@@ -263,7 +266,7 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
             k, mass, gravity_k, velocity_c, need, qd_ref, tau_ff, gains, d, v, m, c, kk, force, raw
         )
         if trailing and not both[k] and h > 0:
-            v, d, a, ok, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k])
+            v, d, a, ok, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k], gains[5])
         else:
             v, d, a, ok = _step(m, c, kk, force, d, v, h, jac[k], both[k] and h > 0)
             trailing = both[k]

@@ -97,10 +97,47 @@ def test_double_support_holds_the_second_sole(spec, plan):
     assert held < 0.05 * loose
 
 
-@pytest.mark.parametrize("kw", [dict(stiffness=0.0), dict(stiffness=9.0, force_limit=-1.0)])
+@pytest.mark.parametrize(
+    "kw",
+    [
+        dict(stiffness=0.0),
+        dict(stiffness=9.0, force_limit=-1.0),
+        dict(stiffness=9.0, friction=0.0),
+        dict(stiffness=9.0, friction=float("nan")),
+    ],
+)
 def test_bad_gains_name_the_value(plan, kw):
     with pytest.raises(SlopewalkError, match="must be > 0"):
         servo_walk(plan, **kw)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("push, friction", [(20.0, 1.0), (5.0, 1.0), (5.0, np.inf), (12.0, 0.8)])
+def test_a_trailing_sole_is_held_along_the_plane_only_inside_the_friction_cone(
+    compiled, push, friction
+):
+    """Hand-derived: as below, but the plan carries the sole along x at 10 mm/s while the
+    loop presses it down with ``push`` N. Held, v' = −q̇_ref, so the plane's wrench is
+    λ = m a − f = (−10, push, 0, 0) N: held while 10 ≤ μ push (20 N at μ 1; 5 N without
+    a bound), let go where the hold would need more than the cone gives (5 N at μ 1,
+    12 N at μ 0.8: 10 > 9.6), the free step a = f."""
+    from slopewalk.planner.kernel import servo
+    from slopewalk.planner.servo_loop import _trailing
+
+    h, dof = 1e-3, 4
+    eye, zero = np.eye(dof), np.zeros((dof, dof))
+    force = np.array([0.0, -push, 0.0, 0.0])
+    drag = np.array([0.01, 0.0, 0.0, 0.0])
+    still = np.zeros(dof)
+    args = (eye, zero, zero, force, still, still, h, eye, drag, friction)
+    if compiled:
+        v, d, a, ok, held = servo._trailing(*args)
+        assert ok
+    else:
+        v, d, a, held = _trailing(*args)
+    assert held == (10.0 <= friction * push)
+    want = -drag if held else h * force
+    np.testing.assert_allclose(v, want, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -120,10 +157,12 @@ def test_a_lifting_sole_stays_on_the_plane_while_the_plane_pushes_it(compiled, p
     lift = np.array([0.0, 0.01, 0.0, 0.0])
     still = np.zeros(dof)
     if compiled:
-        v, d, a, ok, pushed = servo._trailing(eye, zero, zero, force, still, still, h, eye, lift)
+        v, d, a, ok, pushed = servo._trailing(
+            eye, zero, zero, force, still, still, h, eye, lift, np.inf
+        )
         assert ok
     else:
-        v, d, a, pushed = _trailing(eye, zero, zero, force, still, still, h, eye, lift)
+        v, d, a, pushed = _trailing(eye, zero, zero, force, still, still, h, eye, lift, np.inf)
     held = -0.01 / h + push > 0
     assert pushed == held
     want = -lift if held else h * force
