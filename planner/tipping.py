@@ -61,7 +61,8 @@ The rotation's history is carried, not reset:
 
 ``tip`` is predicted when the tilt √(θ_x² + θ_y²) (lift and give) passes the simulator's tip
 angle. The rotation is integrated sample by sample (semi-implicit Euler on the
-plan's time base); a rotation past ``FALLEN`` is reported as that.
+plan's time base; ``_rocking_loop``, run compiled as ``kernel.rocking``); a rotation
+past ``FALLEN`` is reported as that.
 
 Not modelled: a slanted edge of the double-support hull (a rotation about it is
 both axes at once; the extreme lines are the sole edges of feet parallel to x),
@@ -255,7 +256,7 @@ def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rocking(
-    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None
+    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None, compiled=True
 ) -> np.ndarray:
     """Signed tilt of the robot on its support about ``axis``'s lines [rad], (n,) (module doc).
 
@@ -266,6 +267,8 @@ def rocking(
         clearance: Swing sole height over the plane [m], (n,); default the plan's.
         floor_stiffness: k_c of each sole corner on the soft floor [N/m], > 0; None: rigid.
         moments: The plan's ``LinkMoments``, if already computed.
+        compiled: Step through time on the compiled kernel (``kernel.rocking``, the
+            same arithmetic); False: ``_rocking_loop``, the reference.
 
     Returns:
         θ + θ_g: the lift about the pivot line plus the floor's give.
@@ -281,19 +284,53 @@ def rocking(
     com = plan.com[:, axis]
     normal = np.maximum(plan.ground_force[:, 2], 0.0)
     z = zmp[:, axis]
-    reach_low, reach_high = swing_reach(plan, axis)
+    reach = swing_reach(plan, axis)
     single = ~plan.double_support
     height = np.maximum(clearance, 0.0)
     dt = np.diff(plan.t, prepend=plan.t[0])
-    theta = np.zeros(plan.t.size)
     if floor_stiffness is None:
         compliance, centroid = np.zeros(plan.t.size), np.zeros(plan.t.size)
     else:
         k_rot, centroid = give_stiffness(plan, axis, floor_stiffness)
         compliance = normal / k_rot  # [rad/m]: give per metre of CoP offset
     flat_give = compliance * (np.clip(z, lower, upper) - centroid)
+    series = (lines, inertia, stiffness, z, normal, com, compliance, centroid, flat_give, reach)
+    if not compiled:
+        return _rocking_loop(*series, single, height, dt, mass)
+    from slopewalk.planner.kernel.rocking import rocking_loop
+
+    # one layout and dtype per argument: one compiled signature
+    arrays = [
+        np.ascontiguousarray(np.stack(a) if isinstance(a, tuple) else a, dtype=float)
+        for a in series
+    ]
+    single = np.ascontiguousarray(single, dtype=np.bool_)
+    return rocking_loop(
+        *arrays, single, np.ascontiguousarray(height, dtype=float), dt, float(mass), FALLEN
+    )
+
+
+def _rocking_loop(
+    lines, inertia, stiffness, z, normal, com, compliance, centroid, flat_give, reach, single,
+    height, dt, mass,
+) -> np.ndarray:  # fmt: skip
+    """``rocking``'s step through time (module doc): θ + θ_g [rad], (n,).
+
+    Args:
+        lines, inertia, stiffness: The (lower, upper) support lines [m], the inertias
+            about them [kg m²] and their gravity stiffnesses [N m/rad], (n,) each.
+        z: The judged ZMP's coordinate [m]; normal: F_n [N], ≥ 0; com: the CoM's
+            coordinate [m]; compliance: give per metre of CoP offset [rad/m]; centroid:
+            the sole corners' [m]; flat_give: the give while flat [rad]. (n,) each.
+        reach: The swing sole's (lower, upper) edge [m], (n,) each; single: single
+            support, (n,) bool; height: the swing sole's clearance, ≥ 0 [m], (n,).
+        dt: Time step to each sample [s], (n,). mass: The robot's [kg].
+    """
+    lower, upper = lines
+    reach_low, reach_high = reach
+    theta = np.zeros(z.size)
     x, v = 0.0, 0.0
-    for k in range(plan.t.size):
+    for k in range(z.size):
         if x == 0.0 and v == 0.0:  # flat: starts only with the ZMP past a line
             if lower[k] <= z[k] <= upper[k]:
                 theta[k] = flat_give[k]
@@ -329,7 +366,9 @@ def rocking(
     return theta
 
 
-def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None) -> np.ndarray:
+def foot_rotation(
+    plan, zmp=None, clearance=None, floor_stiffness=None, compiled=True
+) -> np.ndarray:
     """Predicted tilt of the support off the plane [rad], (n,): √(roll² + pitch²), ≤ FALLEN.
 
     Args:
@@ -337,8 +376,9 @@ def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None) -> np.nd
         zmp: The ZMP series to judge, (n, 2) [m]; default the plan's own.
         clearance: Swing sole height over the plane [m], (n,); default the plan's.
         floor_stiffness: k_c of each sole corner [N/m]; None: a rigid floor.
+        compiled: ``rocking``'s (False: the numpy reference).
     """
     moments = LinkMoments(plan)
-    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments)
-    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments)
+    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments, compiled)
+    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments, compiled)
     return np.minimum(np.hypot(roll, pitch), FALLEN)

@@ -119,7 +119,8 @@ class Entry:
 ENTRIES = {
     "plan": Entry("plan", ("run",), 20.0),  # a plan's series (run.series)
     "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
-    "predictors": Entry("predictors", ("dynamics", "servo"), 21.0),  # a trial's servo loop
+    # a trial's servo loop and support rocking
+    "predictors": Entry("predictors", ("dynamics", "servo", "rocking"), 21.0),
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process
