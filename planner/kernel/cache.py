@@ -18,7 +18,10 @@ call, which prints one line to stderr when its code is not cached
 times, measured on the 2-core machine (docs/benchmark.md), of the cold entries the
 command expects, ``expect``), and ``compiled`` after it. The mark is a
 file in the cache folder named by the entry's modules' keys, so an edit or an
-emptied cache makes the line come back.
+emptied cache makes the line come back. Where two or more of the command's entries are
+cold, ``first_use`` has them compiled side by side first, one process each
+(``warm.prepare``: about the longest's time, not the sum), and the line says that; a
+sweep or an envelope does the same before its workers start (``Batch.kernel``).
 """
 
 from __future__ import annotations
@@ -58,6 +61,11 @@ def module_key(module: str) -> str:
     for name in sorted(dependencies(module) | {module}):
         digest.update(name.encode() + b"\0" + (KERNEL / f"{name}.py").read_bytes())
     return digest.hexdigest()[:16]
+
+
+def cache_root() -> str:
+    """numba's cache folder (``_root``), for processes that must share it."""
+    return _root()
 
 
 def _root() -> str:
@@ -126,16 +134,43 @@ _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process
 _EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile (``expect``)
 NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
+PARALLEL_EXTRA_S = 3.0  # [s] entries side by side: the longest's time and this (warm.prepare)
 
 
-def cold_seconds(*names: str) -> float:
-    """The compile time [s] of the entries of ``names`` whose code is not cached."""
-    return sum(ENTRIES[n].seconds for n in names if not ENTRIES[n].mark().exists())
+def cold_seconds(*names: str, parallel: bool = False) -> float:
+    """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
+    or with ``parallel`` (``warm.prepare``, one process each) the longest's plus
+    ``PARALLEL_EXTRA_S``."""
+    cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
+    if parallel and len(cold) > 1:
+        return max(cold) + PARALLEL_EXTRA_S
+    return sum(cold)
 
 
 def expect(*names: str) -> None:
     """The entries the running command compiles, for ``first_use``'s one line (the CLI)."""
     _EXPECTED[0] = names
+
+
+def notice(names, *, parallel: bool = False) -> None:
+    """Say ``first_use``'s one line for the cold entries of ``names``, unless another
+    process of the same command said it less than ``NOTICE_S`` ago for each of them (a
+    notice file next to each cold entry's mark stands for it)."""
+    cold = [n for n in names if not ENTRIES[n].mark().exists()]
+    if not cold:
+        return
+    paths = [ENTRIES[n].mark().with_suffix(".notice") for n in cold]
+    try:
+        paths[0].parent.mkdir(parents=True, exist_ok=True)
+        if all(p.exists() and time.time() - p.stat().st_mtime < NOTICE_S for p in paths):
+            return
+        for path in paths:
+            path.touch()
+    except OSError:
+        pass
+    seconds = cold_seconds(*cold, parallel=parallel)
+    print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
+    sys.stderr.flush()
 
 
 def first_use(name: str) -> None:
@@ -144,26 +179,20 @@ def first_use(name: str) -> None:
     The line sums the cold entries the command expects (``expect``; else ``name``'s
     alone). Once per cache and command: a notice file next to the mark stands for it,
     so the workers of a sweep compiling at the same time print one line between them.
+    Where two or more of them are cold and there are cores for them, they are compiled
+    side by side first (``warm.prepare``), and the line says that time.
     """
     if name in _WARM:
         return
     _WARM.add(name)  # asked once per process; ``compiled`` marks it after the call
-    entry = ENTRIES[name]
-    if entry.mark().exists():
+    if ENTRIES[name].mark().exists():
         return
-    names = set(_EXPECTED[0]) | {name}
+    names = list(dict.fromkeys((*_EXPECTED[0], name)))
     _WARM.update(names)  # the line covers the command's other entries
-    seconds = cold_seconds(*names)
-    notice = entry.mark().with_suffix(".notice")
-    try:
-        notice.parent.mkdir(parents=True, exist_ok=True)
-        if notice.exists() and time.time() - notice.stat().st_mtime < NOTICE_S:
-            return
-        notice.touch()
-    except OSError:
-        pass
-    print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
-    sys.stderr.flush()
+    from slopewalk.planner.kernel import warm
+
+    if warm.prepare(*names) == 0.0:  # nothing to do side by side: compiled at first use
+        notice(names)
 
 
 def compiled(name: str) -> None:

@@ -191,8 +191,10 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref):
     a, wrench, good = _constrained(matrix, rhs, jac, target)
     if not good:
         return v, d, a, False, False
-    if not wrench[_NORMAL] > 0.0:
-        vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, False)
+    pushes = wrench[_NORMAL] > 0.0
+    if not pushes:
+        # held = pushes, False here: a literal False would compile a second ``_step`` (~3 s)
+        vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, pushes)
         return vn, dn, a, ok, False
     vn, dn = np.empty(dof), np.empty(dof)
     for i in range(dof):
