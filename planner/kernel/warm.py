@@ -136,7 +136,7 @@ def prepare(*names: str, workers: int | None = None) -> float:
         return 0.0
     start = time.perf_counter()
     cache.notice(cold, parallel=True)
-    waiting, running = list(cold), []
+    waiting, running = list(cold), list[subprocess.Popen]()
     while waiting or running:
         while waiting and len(running) < slots:
             running.append(_spawn(waiting.pop(0)))
