@@ -78,7 +78,7 @@ class Batch:
             verdicts joined by "/").
         kernel: The compiled kernel's entries a job calls (``planner/kernel/cache.py``):
             on a cold cache a local run compiles them side by side before its workers
-            start (``kernel.warm.prepare``), instead of every worker compiling them all.
+            start (``kernel.cache.prepare``), instead of every worker compiling them all.
     """
 
     name: str
@@ -159,9 +159,9 @@ def run_batch(
         if intro is not None:
             bar.say(intro(done, workers))
         if executor is None and done < total and batch.kernel:
-            from slopewalk.planner.kernel import warm
+            from slopewalk.planner.kernel import cache
 
-            warm.prepare(*batch.kernel, workers=workers)
+            cache.prepare(*batch.kernel, workers=workers)
         # a cluster sets its window from its workers' threads, never from this machine's cores
         pool = (
             LocalPool(batch.fn, workers=workers)

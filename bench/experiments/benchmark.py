@@ -112,19 +112,19 @@ _ENTRY_CALLS = {
     ),
     "trial": "run_trial(spec, TrialSpec(GaitParams.nominal(spec, 1.0)))",
     # what ``slopewalk sweep`` does on a cold cache before its workers start
-    "sweep": "warm.prepare('plan', 'predictors', workers=2)",
+    "sweep": "cache.prepare('plan', 'predictors', workers=2)",
 }
 _ENTRY = """
 import json, resource, time
 import numpy as np
-from slopewalk.planner.kernel import warm
+from slopewalk.planner.kernel import cache
 from slopewalk.planner.plan import evaluate, plan_walk
 from slopewalk.planner.spec import load_spec
 from slopewalk.planner.gait import GaitParams
 from slopewalk.bench.sim.trial import run_trial
 from slopewalk.bench.sim.trial_spec import TrialSpec
 spec = load_spec()
-def cpu_s():  # this process and its finished children (``warm.prepare``'s), user + system
+def cpu_s():  # this process and its finished children (``cache.prepare``'s), user + system
     own = resource.getrusage(resource.RUSAGE_SELF)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
@@ -140,7 +140,7 @@ def entry_compiles() -> dict[str, dict]:
     Per entry ("plan": ``plan_walk``, "scores": the GA's ``evaluate``, "trial":
     ``run_trial``, the plan and the trial's predictors, "sweep": what ``slopewalk sweep``
     compiles before its workers start, the plan's and the predictors' entries side by
-    side, ``warm.prepare``), each compiling only what it calls: ``s`` (wall) and
+    side, ``cache.prepare``), each compiling only what it calls: ``s`` (wall) and
     ``cpu_s`` (that process's CPU time and its children's, which moves less with other
     jobs' load); the trial also ``warm_s``, its call again in a fresh process
     once its cache is filled.

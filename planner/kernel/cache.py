@@ -20,7 +20,7 @@ command expects, ``expect``), and ``compiled`` after it. The mark is a
 file in the cache folder named by the entry's modules' keys, so an edit or an
 emptied cache makes the line come back. Where two or more of the command's entries are
 cold, ``first_use`` has them compiled side by side first, one process each
-(``warm.prepare``: about the longest's time, not the sum), and the line says that; a
+(``prepare``: about the longest's time, not the sum), and the line says that; a
 sweep or an envelope does the same before its workers start (``Batch.kernel``).
 """
 
@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -61,11 +62,6 @@ def module_key(module: str) -> str:
     for name in sorted(dependencies(module) | {module}):
         digest.update(name.encode() + b"\0" + (KERNEL / f"{name}.py").read_bytes())
     return digest.hexdigest()[:16]
-
-
-def cache_root() -> str:
-    """numba's cache folder (``_root``), for processes that must share it."""
-    return _root()
 
 
 def _root() -> str:
@@ -139,7 +135,7 @@ PARALLEL_EXTRA_S = 3.0  # [s] entries side by side: the longest's time and this 
 
 def cold_seconds(*names: str, parallel: bool = False) -> float:
     """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
-    or with ``parallel`` (``warm.prepare``, one process each) the longest's plus
+    or with ``parallel`` (``prepare``, one process each) the longest's plus
     ``PARALLEL_EXTRA_S``."""
     cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
     if parallel and len(cold) > 1:
@@ -180,7 +176,7 @@ def first_use(name: str) -> None:
     alone). Once per cache and command: a notice file next to the mark stands for it,
     so the workers of a sweep compiling at the same time print one line between them.
     Where two or more of them are cold and there are cores for them, they are compiled
-    side by side first (``warm.prepare``), and the line says that time.
+    side by side first (``prepare``), and the line says that time.
     """
     if name in _WARM:
         return
@@ -189,9 +185,7 @@ def first_use(name: str) -> None:
         return
     names = list(dict.fromkeys((*_EXPECTED[0], name)))
     _WARM.update(names)  # the line covers the command's other entries
-    from slopewalk.planner.kernel import warm
-
-    if warm.prepare(*names) == 0.0:  # nothing to do side by side: compiled at first use
+    if prepare(*names) == 0.0:  # nothing to do side by side: compiled at first use
         notice(names)
 
 
@@ -206,3 +200,39 @@ def compiled(name: str) -> None:
         mark.touch()
     except OSError:
         pass  # an unwritable cache: numba recompiles each time
+
+
+_RUN = "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
+
+
+def _spawn(name: str) -> subprocess.Popen:
+    """A process compiling entry ``name`` into this process's numba cache."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=_root())
+    return subprocess.Popen([sys.executable, "-c", _RUN.format(name)], env=env)
+
+
+def prepare(*names: str, workers: int | None = None) -> float:
+    """Compile the cold entries of ``names`` side by side, one process each (module doc).
+
+    Each process runs ``warm.compile_entry`` (its module doc says how they share the
+    work), named in a string, so this module imports nothing of what it compiles.
+    Nothing happens where fewer than two are cold, or on one core (returns 0): the
+    command compiles at first use. Says ``notice``'s one line first (about the longest
+    cold entry's time). Returns the wall time spent [s].
+    """
+    cold = sorted(
+        (n for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()),
+        key=lambda n: -ENTRIES[n].seconds,
+    )
+    slots = min(workers or os.cpu_count() or 1, len(cold))
+    if slots < 2:
+        return 0.0
+    start = time.perf_counter()
+    notice(cold, parallel=True)
+    waiting, running = list(cold), list[subprocess.Popen]()
+    while waiting or running:
+        while waiting and len(running) < slots:
+            running.append(_spawn(waiting.pop(0)))
+        running[0].wait()  # longest first: the others end about as soon
+        running = [p for p in running if p.poll() is None]
+    return time.perf_counter() - start

@@ -4,7 +4,7 @@ numba compiles one function at a time per process (its compiler lock), and most 
 compile is numba's own Python (type inference, inlining, lowering), not LLVM: a trial's
 two entries, "plan" (``run.series``, ~17 s CPU) and "predictors" (``dynamics``,
 ``servo``, ``rocking``, ~17 s more in the same process), take ~35 s one after the other.
-``prepare`` compiles the cold ones of a command's entries at once, one process each
+``cache.prepare`` compiles the cold ones of a command's entries at once, one process each
 (``compile_entry``, at most one per core), each writing what it compiles into numba's
 cache, where the command then finds it: on 2 cores the wall time is about the longest
 entry's, not the sum. The predictors' process first compiles what needs nothing of the
@@ -20,17 +20,9 @@ compile nothing new), so the predictors' process needs no plan, and no compiled
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-import time
-
 import numpy as np
 
 from slopewalk.planner.kernel import cache
-
-_RUN = "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
-
 
 # The per-block stages of ``sample`` both entries call, as their callers type them. The
 # plan's process compiles these first and caches them; the predictors' process compiles
@@ -112,34 +104,3 @@ def compile_entry(name: str) -> None:
             gait = GaitParams.nominal(spec, 1.0, steps=1, dt=0.01)
             evaluate(spec, gait, np.array([[0.2, 0.06, 0.2]]))
     cache.compiled(name)
-
-
-def _spawn(name: str) -> subprocess.Popen:
-    """A process compiling entry ``name`` into this process's numba cache."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache.cache_root())
-    return subprocess.Popen([sys.executable, "-c", _RUN.format(name)], env=env)
-
-
-def prepare(*names: str, workers: int | None = None) -> float:
-    """Compile the cold entries of ``names`` side by side, one process each (module doc).
-
-    Nothing happens where fewer than two are cold, or on one core (returns 0): the
-    command compiles at first use. Says ``cache.notice``'s one line first (about the
-    longest cold entry's time). Returns the wall time spent [s].
-    """
-    cold = sorted(
-        (n for n in dict.fromkeys(names) if not cache.ENTRIES[n].mark().exists()),
-        key=lambda n: -cache.ENTRIES[n].seconds,
-    )
-    slots = min(workers or os.cpu_count() or 1, len(cold))
-    if slots < 2:
-        return 0.0
-    start = time.perf_counter()
-    cache.notice(cold, parallel=True)
-    waiting, running = list(cold), list[subprocess.Popen]()
-    while waiting or running:
-        while waiting and len(running) < slots:
-            running.append(_spawn(waiting.pop(0)))
-        running[0].wait()  # longest first: the others end about as soon
-        running = [p for p in running if p.poll() is None]
-    return time.perf_counter() - start

@@ -4,7 +4,7 @@ import shutil
 
 import pytest
 
-from slopewalk.planner.kernel import cache, warm
+from slopewalk.planner.kernel import cache
 
 
 @pytest.fixture
@@ -46,7 +46,7 @@ def cold(tmp_path, monkeypatch):
     monkeypatch.setattr(cache, "_DONE", set())
     monkeypatch.setattr(cache, "_EXPECTED", [()])
     # one process compiling at first use (tests/planner/test_kernel_warm.py: side by side)
-    monkeypatch.setattr(warm, "prepare", lambda *names, **kw: 0.0)
+    monkeypatch.setattr(cache, "prepare", lambda *names, **kw: 0.0)
 
 
 def _lines(capsys):

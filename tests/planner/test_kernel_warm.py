@@ -31,7 +31,7 @@ def test_one_cold_entry_is_left_to_its_first_use(tmp_path, monkeypatch):
     mark = cache.ENTRIES["plan"].mark()
     mark.parent.mkdir(parents=True)
     mark.touch()
-    assert warm.prepare("plan", "predictors") == 0.0  # returns at once, nothing spawned
+    assert cache.prepare("plan", "predictors") == 0.0  # returns at once, nothing spawned
     alone = cache.ENTRIES["predictors"].seconds
     assert cache.cold_seconds("plan", "predictors", parallel=True) == alone
     mark.unlink()
@@ -40,7 +40,7 @@ def test_one_cold_entry_is_left_to_its_first_use(tmp_path, monkeypatch):
 
 
 class _Done:
-    """A finished entry process (``warm._spawn``'s stand-in: its compiling is not the point)."""
+    """A finished entry process (``cache._spawn``'s stand-in: its compiling is not the point)."""
 
     def __init__(self, name, spawned):
         spawned.append(name)
@@ -60,8 +60,8 @@ def test_a_cold_command_compiles_its_entries_side_by_side_and_says_so_once(
     monkeypatch.setattr(cache, "_WARM", set())
     monkeypatch.setattr(cache, "_EXPECTED", [("plan", "predictors")])
     spawned: list[str] = []
-    monkeypatch.setattr(warm, "_spawn", lambda name: _Done(name, spawned))
-    monkeypatch.setattr(warm.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(cache, "_spawn", lambda name: _Done(name, spawned))
+    monkeypatch.setattr(cache.os, "cpu_count", lambda: 2)
     seconds = cache.cold_seconds("plan", "predictors", parallel=True)
     cache.first_use("plan")
     cache.first_use("predictors")
@@ -73,8 +73,8 @@ def test_a_cold_command_compiles_its_entries_side_by_side_and_says_so_once(
 _AFTER = """
 import json, sys
 from numba.core import event
-from slopewalk.planner.kernel import warm
-warm.prepare("plan", "predictors", workers=2)
+from slopewalk.planner.kernel import cache
+cache.prepare("plan", "predictors", workers=2)
 seen = []
 class Listener(event.Listener):
     def on_start(self, e): seen.append(e.data["dispatcher"].py_func.__qualname__)
