@@ -118,29 +118,28 @@ class Entry:
         return root / "compiled" / f"{self.name}-{hashlib.sha256(keys.encode()).hexdigest()[:16]}"
 
 
-# cold compile CPU s on the 2-core machine at load ~1.6 (docs/benchmark.md, compile_*_cpu_s:
-# a plan 21 s, a trial 43 s, its first calls' own work ~2 s each left out)
+# cold compile CPU s on the 2-core machine (docs/benchmark.md, compile_*_cpu_s): a plan
+# 18.7 s, a trial 38 s (load ~3.6), the GA's scores 36 s (load ~3.6, 30-34 s at ~3); side by
+# side (``prepare``) the plan's process 16.0 s and the predictors' 16.5 s (load ~3)
 ENTRIES = {
-    "plan": Entry("plan", ("run",), 20.0),  # a plan's series (run.series)
+    "plan": Entry("plan", ("run",), 18.0),  # a plan's series (run.series)
     "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
     # a trial's servo loop and support rocking
-    "predictors": Entry("predictors", ("dynamics", "servo", "rocking"), 21.0),
+    "predictors": Entry("predictors", ("dynamics", "servo", "rocking"), 19.0),
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process
 _EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile (``expect``)
 NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
-PARALLEL_EXTRA_S = 3.0  # [s] entries side by side: the longest's time and this (warm.prepare)
 
 
-def cold_seconds(*names: str, parallel: bool = False) -> float:
+def cold_seconds(*names: str, slots: int = 1) -> float:
     """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
-    or with ``parallel`` (``prepare``, one process each) the longest's plus
-    ``PARALLEL_EXTRA_S``."""
+    over ``slots`` processes compiling them side by side (``prepare``: the entries share
+    ``sample``'s stages, which one process compiles for both, so each of two processes
+    takes about half the sum)."""
     cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
-    if parallel and len(cold) > 1:
-        return max(cold) + PARALLEL_EXTRA_S
-    return sum(cold)
+    return sum(cold) / max(1, min(slots, len(cold)))
 
 
 def expect(*names: str) -> None:
@@ -148,7 +147,7 @@ def expect(*names: str) -> None:
     _EXPECTED[0] = names
 
 
-def notice(names, *, parallel: bool = False) -> None:
+def notice(names, *, slots: int = 1) -> None:
     """Say ``first_use``'s one line for the cold entries of ``names``, unless another
     process of the same command said it less than ``NOTICE_S`` ago for each of them (a
     notice file next to each cold entry's mark stands for it)."""
@@ -164,7 +163,7 @@ def notice(names, *, parallel: bool = False) -> None:
             path.touch()
     except OSError:
         pass
-    seconds = cold_seconds(*cold, parallel=parallel)
+    seconds = cold_seconds(*cold, slots=slots)
     print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
     sys.stderr.flush()
 
@@ -228,7 +227,7 @@ def prepare(*names: str, workers: int | None = None) -> float:
     if slots < 2:
         return 0.0
     start = time.perf_counter()
-    notice(cold, parallel=True)
+    notice(cold, slots=slots)
     waiting, running = list(cold), list[subprocess.Popen]()
     while waiting or running:
         while waiting and len(running) < slots:

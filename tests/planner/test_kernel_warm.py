@@ -33,10 +33,10 @@ def test_one_cold_entry_is_left_to_its_first_use(tmp_path, monkeypatch):
     mark.touch()
     assert cache.prepare("plan", "predictors") == 0.0  # returns at once, nothing spawned
     alone = cache.ENTRIES["predictors"].seconds
-    assert cache.cold_seconds("plan", "predictors", parallel=True) == alone
+    assert cache.cold_seconds("plan", "predictors", slots=2) == alone
     mark.unlink()
-    both = cache.cold_seconds("plan", "predictors", parallel=True)
-    assert both == max(alone, cache.ENTRIES["plan"].seconds) + cache.PARALLEL_EXTRA_S
+    both = cache.cold_seconds("plan", "predictors", slots=2)
+    assert both == (alone + cache.ENTRIES["plan"].seconds) / 2
 
 
 class _Done:
@@ -62,7 +62,7 @@ def test_a_cold_command_compiles_its_entries_side_by_side_and_says_so_once(
     spawned: list[str] = []
     monkeypatch.setattr(cache, "_spawn", lambda name: _Done(name, spawned))
     monkeypatch.setattr(cache.os, "cpu_count", lambda: 2)
-    seconds = cache.cold_seconds("plan", "predictors", parallel=True)
+    seconds = cache.cold_seconds("plan", "predictors", slots=2)
     cache.first_use("plan")
     cache.first_use("predictors")
     assert sorted(spawned) == ["plan", "predictors"]

@@ -85,7 +85,9 @@ def first_estimate_s(steps: float, workers: int, *, compile_s: float | None = No
     if compile_s is None:
         from slopewalk.planner.kernel import cache
 
-        compile_s = cache.cold_seconds("plan", "predictors", parallel=workers > 1)
+        compile_s = cache.cold_seconds(
+            "plan", "predictors", slots=min(workers, os.cpu_count() or 1)
+        )
     return steps * step_seconds() / max(workers, 1) + WORKER_START_S + compile_s
 
 
