@@ -201,7 +201,11 @@ def compiled(name: str) -> None:
         pass  # an unwritable cache: numba recompiles each time
 
 
-_RUN = "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
+# a Ctrl-C ends an entry's process quietly (the command's own process says it was stopped)
+_RUN = (
+    "import signal; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+    "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
+)
 
 
 def _spawn(name: str) -> subprocess.Popen:
@@ -229,9 +233,14 @@ def prepare(*names: str, workers: int | None = None) -> float:
     start = time.perf_counter()
     notice(cold, slots=slots)
     waiting, running = list(cold), list[subprocess.Popen]()
-    while waiting or running:
-        while waiting and len(running) < slots:
-            running.append(_spawn(waiting.pop(0)))
-        running[0].wait()  # longest first: the others end about as soon
-        running = [p for p in running if p.poll() is None]
+    try:
+        while waiting or running:
+            while waiting and len(running) < slots:
+                running.append(_spawn(waiting.pop(0)))
+            running[0].wait()  # longest first: the others end about as soon
+            running = [p for p in running if p.poll() is None]
+    except BaseException:  # stopped (Ctrl-C, SIGTERM): the entries' processes with it
+        for process in running:
+            process.kill()
+        raise
     return time.perf_counter() - start
