@@ -61,7 +61,8 @@ The rotation's history is carried, not reset:
 
 ``tip`` is predicted when the tilt √(θ_x² + θ_y²) (lift and give) passes the simulator's tip
 angle. The rotation is integrated sample by sample (semi-implicit Euler on the
-plan's time base); a rotation past ``FALLEN`` is reported as that.
+plan's time base; ``_rocking_loop``, run compiled as ``kernel.rocking``); a rotation
+past ``FALLEN`` is reported as that.
 
 Not modelled: a slanted edge of the double-support hull (a rotation about it is
 both axes at once; the extreme lines are the sole edges of feet parallel to x),
@@ -255,7 +256,14 @@ def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rocking(
-    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None, props=None
+    plan,
+    axis: int,
+    zmp=None,
+    clearance=None,
+    floor_stiffness=None,
+    moments=None,
+    props=None,
+    compiled=True,
 ) -> np.ndarray:
     """Signed tilt of the robot on its support about ``axis``'s lines [rad], (n,) (module doc).
 
@@ -268,6 +276,8 @@ def rocking(
         moments: The plan's ``LinkMoments``, if already computed.
         props: A boolean array (n,) or None; where given, the samples at which the swing
             sole props the rotation (the module doc's prop) are set True in it.
+        compiled: Step through time on the compiled kernel (``kernel.rocking``, the
+            same arithmetic); False: ``_rocking_loop``, the reference.
 
     Returns:
         θ + θ_g: the lift about the pivot line plus the floor's give.
@@ -283,19 +293,62 @@ def rocking(
     com = plan.com[:, axis]
     normal = np.maximum(plan.ground_force[:, 2], 0.0)
     z = zmp[:, axis]
-    reach_low, reach_high = swing_reach(plan, axis)
+    reach = swing_reach(plan, axis)
     single = ~plan.double_support
     height = np.maximum(clearance, 0.0)
     dt = np.diff(plan.t, prepend=plan.t[0])
-    theta = np.zeros(plan.t.size)
     if floor_stiffness is None:
         compliance, centroid = np.zeros(plan.t.size), np.zeros(plan.t.size)
     else:
         k_rot, centroid = give_stiffness(plan, axis, floor_stiffness)
         compliance = normal / k_rot  # [rad/m]: give per metre of CoP offset
     flat_give = compliance * (np.clip(z, lower, upper) - centroid)
+    series = (lines, inertia, stiffness, z, normal, com, compliance, centroid, flat_give, reach)
+    propped = np.zeros(plan.t.size, dtype=np.bool_)
+    if not compiled:
+        theta = _rocking_loop(*series, single, height, dt, mass, propped)
+        if props is not None:
+            props |= propped
+        return theta
+    from slopewalk.planner.kernel.rocking import rocking_loop
+
+    # one layout and dtype per argument: one compiled signature
+    arrays = [
+        np.ascontiguousarray(np.stack(a) if isinstance(a, tuple) else a, dtype=float)
+        for a in series
+    ]
+    single = np.ascontiguousarray(single, dtype=np.bool_)
+    theta = rocking_loop(
+        *arrays, single, np.ascontiguousarray(height, dtype=float), dt, float(mass), FALLEN,
+        propped,
+    )  # fmt: skip
+    if props is not None:
+        props |= propped
+    return theta
+
+
+def _rocking_loop(
+    lines, inertia, stiffness, z, normal, com, compliance, centroid, flat_give, reach, single,
+    height, dt, mass, props,
+) -> np.ndarray:  # fmt: skip
+    """``rocking``'s step through time (module doc): θ + θ_g [rad], (n,).
+
+    Args:
+        lines, inertia, stiffness: The (lower, upper) support lines [m], the inertias
+            about them [kg m²] and their gravity stiffnesses [N m/rad], (n,) each.
+        z: The judged ZMP's coordinate [m]; normal: F_n [N], ≥ 0; com: the CoM's
+            coordinate [m]; compliance: give per metre of CoP offset [rad/m]; centroid:
+            the sole corners' [m]; flat_give: the give while flat [rad]. (n,) each.
+        reach: The swing sole's (lower, upper) edge [m], (n,) each; single: single
+            support, (n,) bool; height: the swing sole's clearance, ≥ 0 [m], (n,).
+        dt: Time step to each sample [s], (n,). mass: The robot's [kg].
+        props: (n,) bool, set True at the samples where the swing sole props the rotation.
+    """
+    lower, upper = lines
+    reach_low, reach_high = reach
+    theta = np.zeros(z.size)
     x, v = 0.0, 0.0
-    for k in range(plan.t.size):
+    for k in range(z.size):
         if x == 0.0 and v == 0.0:  # flat: starts only with the ZMP past a line
             if lower[k] <= z[k] <= upper[k]:
                 theta[k] = flat_give[k]
@@ -323,8 +376,7 @@ def rocking(
             beyond = (reach_high[k] - upper[k]) if x > 0 else (lower[k] - reach_low[k])
             if beyond > 0.0 and abs(x) * beyond > height[k]:
                 x = np.copysign(height[k] / beyond, x)
-                if props is not None:
-                    props[k] = True
+                props[k] = True
                 v = min(v, 0.0) if x > 0 else max(v, 0.0)
                 if x == 0.0:
                     v = 0.0
@@ -333,7 +385,9 @@ def rocking(
     return theta
 
 
-def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None, props=None) -> np.ndarray:
+def foot_rotation(
+    plan, zmp=None, clearance=None, floor_stiffness=None, props=None, compiled=True
+) -> np.ndarray:
     """Predicted tilt of the support off the plane [rad], (n,): √(roll² + pitch²), ≤ FALLEN.
 
     Args:
@@ -343,8 +397,9 @@ def foot_rotation(plan, zmp=None, clearance=None, floor_stiffness=None, props=No
         floor_stiffness: k_c of each sole corner [N/m]; None: a rigid floor.
         props: Boolean (n,) or None: where given, marks the samples at which the swing
             sole props the roll or the pitch (``rocking``).
+        compiled: ``rocking``'s (False: the numpy reference).
     """
     moments = LinkMoments(plan)
-    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments, props)
-    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments, props)
+    roll = rocking(plan, ROLL, zmp, clearance, floor_stiffness, moments, props, compiled)
+    pitch = rocking(plan, PITCH, zmp, clearance, floor_stiffness, moments, props, compiled)
     return np.minimum(np.hypot(roll, pitch), FALLEN)

@@ -76,6 +76,9 @@ class Batch:
         unit: What a job is, plural, for messages ("trials").
         outcome: A row's outcome in a few words, for progress lines (default: its
             verdicts joined by "/").
+        kernel: The compiled kernel's entries a job calls (``planner/kernel/cache.py``):
+            on a cold cache a local run compiles them side by side before its workers
+            start (``kernel.cache.prepare``), instead of every worker compiling them all.
     """
 
     name: str
@@ -88,6 +91,7 @@ class Batch:
     source: str
     unit: str = "jobs"
     outcome: Callable | None = None
+    kernel: tuple[str, ...] = ()
 
     def paths(self, out_dir: Path) -> tuple[Path, Path]:
         """(finished table, partial table) in ``out_dir``."""
@@ -154,6 +158,10 @@ def run_batch(
         bar = Progress(total, done, tty=progress, quiet=quiet, name=batch.name)
         if intro is not None:
             bar.say(intro(done, workers))
+        if executor is None and done < total and batch.kernel:
+            from slopewalk.planner.kernel import cache
+
+            cache.prepare(*batch.kernel, workers=workers)
         # a cluster sets its window from its workers' threads, never from this machine's cores
         pool = (
             LocalPool(batch.fn, workers=workers)

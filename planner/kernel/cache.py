@@ -18,7 +18,10 @@ call, which prints one line to stderr when its code is not cached
 times, measured on the 2-core machine (docs/benchmark.md), of the cold entries the
 command expects, ``expect``), and ``compiled`` after it. The mark is a
 file in the cache folder named by the entry's modules' keys, so an edit or an
-emptied cache makes the line come back.
+emptied cache makes the line come back. Where two or more of the command's entries are
+cold, ``first_use`` has them compiled side by side first, one process each
+(``prepare``: about the longest's time, not the sum), and the line says that; a
+sweep or an envelope does the same before its workers start (``Batch.kernel``).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -114,12 +118,14 @@ class Entry:
         return root / "compiled" / f"{self.name}-{hashlib.sha256(keys.encode()).hexdigest()[:16]}"
 
 
-# cold compile CPU s on the 2-core machine at load ~1.6 (docs/benchmark.md, compile_*_cpu_s:
-# a plan 21 s, a trial 43 s, its first calls' own work ~2 s each left out)
+# cold compile CPU s on the 2-core machine (docs/benchmark.md, compile_*_cpu_s): a plan
+# 18.7 s, a trial 38 s (load ~3.6), the GA's scores 36 s (load ~3.6, 30-34 s at ~3); side by
+# side (``prepare``) the plan's process 16.0 s and the predictors' 16.5 s (load ~3)
 ENTRIES = {
-    "plan": Entry("plan", ("run",), 20.0),  # a plan's series (run.series)
+    "plan": Entry("plan", ("run",), 18.0),  # a plan's series (run.series)
     "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
-    "predictors": Entry("predictors", ("dynamics", "servo"), 21.0),  # a trial's servo loop
+    # a trial's servo loop and support rocking
+    "predictors": Entry("predictors", ("dynamics", "servo", "rocking"), 19.0),
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process
@@ -127,14 +133,39 @@ _EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile
 NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
 
 
-def cold_seconds(*names: str) -> float:
-    """The compile time [s] of the entries of ``names`` whose code is not cached."""
-    return sum(ENTRIES[n].seconds for n in names if not ENTRIES[n].mark().exists())
+def cold_seconds(*names: str, slots: int = 1) -> float:
+    """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
+    over ``slots`` processes compiling them side by side (``prepare``: the entries share
+    ``sample``'s stages, which one process compiles for both, so each of two processes
+    takes about half the sum)."""
+    cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
+    return sum(cold) / max(1, min(slots, len(cold)))
 
 
 def expect(*names: str) -> None:
     """The entries the running command compiles, for ``first_use``'s one line (the CLI)."""
     _EXPECTED[0] = names
+
+
+def notice(names, *, slots: int = 1) -> None:
+    """Say ``first_use``'s one line for the cold entries of ``names``, unless another
+    process of the same command said it less than ``NOTICE_S`` ago for each of them (a
+    notice file next to each cold entry's mark stands for it)."""
+    cold = [n for n in names if not ENTRIES[n].mark().exists()]
+    if not cold:
+        return
+    paths = [ENTRIES[n].mark().with_suffix(".notice") for n in cold]
+    try:
+        paths[0].parent.mkdir(parents=True, exist_ok=True)
+        if all(p.exists() and time.time() - p.stat().st_mtime < NOTICE_S for p in paths):
+            return
+        for path in paths:
+            path.touch()
+    except OSError:
+        pass
+    seconds = cold_seconds(*cold, slots=slots)
+    print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
+    sys.stderr.flush()
 
 
 def first_use(name: str) -> None:
@@ -143,26 +174,18 @@ def first_use(name: str) -> None:
     The line sums the cold entries the command expects (``expect``; else ``name``'s
     alone). Once per cache and command: a notice file next to the mark stands for it,
     so the workers of a sweep compiling at the same time print one line between them.
+    Where two or more of them are cold and there are cores for them, they are compiled
+    side by side first (``prepare``), and the line says that time.
     """
     if name in _WARM:
         return
     _WARM.add(name)  # asked once per process; ``compiled`` marks it after the call
-    entry = ENTRIES[name]
-    if entry.mark().exists():
+    if ENTRIES[name].mark().exists():
         return
-    names = set(_EXPECTED[0]) | {name}
+    names = list(dict.fromkeys((*_EXPECTED[0], name)))
     _WARM.update(names)  # the line covers the command's other entries
-    seconds = cold_seconds(*names)
-    notice = entry.mark().with_suffix(".notice")
-    try:
-        notice.parent.mkdir(parents=True, exist_ok=True)
-        if notice.exists() and time.time() - notice.stat().st_mtime < NOTICE_S:
-            return
-        notice.touch()
-    except OSError:
-        pass
-    print(f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)", file=sys.stderr)
-    sys.stderr.flush()
+    if prepare(*names) == 0.0:  # nothing to do side by side: compiled at first use
+        notice(names)
 
 
 def compiled(name: str) -> None:
@@ -176,3 +199,48 @@ def compiled(name: str) -> None:
         mark.touch()
     except OSError:
         pass  # an unwritable cache: numba recompiles each time
+
+
+# a Ctrl-C ends an entry's process quietly (the command's own process says it was stopped)
+_RUN = (
+    "import signal; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+    "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
+)
+
+
+def _spawn(name: str) -> subprocess.Popen:
+    """A process compiling entry ``name`` into this process's numba cache."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=_root())
+    return subprocess.Popen([sys.executable, "-c", _RUN.format(name)], env=env)
+
+
+def prepare(*names: str, workers: int | None = None) -> float:
+    """Compile the cold entries of ``names`` side by side, one process each (module doc).
+
+    Each process runs ``warm.compile_entry`` (its module doc says how they share the
+    work), named in a string, so this module imports nothing of what it compiles.
+    Nothing happens where fewer than two are cold, or on one core (returns 0): the
+    command compiles at first use. Says ``notice``'s one line first (about the longest
+    cold entry's time). Returns the wall time spent [s].
+    """
+    cold = sorted(
+        (n for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()),
+        key=lambda n: -ENTRIES[n].seconds,
+    )
+    slots = min(workers or os.cpu_count() or 1, len(cold))
+    if slots < 2:
+        return 0.0
+    start = time.perf_counter()
+    notice(cold, slots=slots)
+    waiting, running = list(cold), list[subprocess.Popen]()
+    try:
+        while waiting or running:
+            while waiting and len(running) < slots:
+                running.append(_spawn(waiting.pop(0)))
+            running[0].wait()  # longest first: the others end about as soon
+            running = [p for p in running if p.poll() is None]
+    except BaseException:  # stopped (Ctrl-C, SIGTERM): the entries' processes with it
+        for process in running:
+            process.kill()
+        raise
+    return time.perf_counter() - start

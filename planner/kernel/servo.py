@@ -194,8 +194,10 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     if not good:
         return v, d, a, False, False
     normal = wrench[_NORMAL]
-    if not (normal > 0.0 and abs(wrench[_TANGENT]) <= friction * normal):
-        vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, False)
+    held = normal > 0.0 and abs(wrench[_TANGENT]) <= friction * normal
+    if not held:
+        # held, False here: a literal False would compile a second ``_step`` (~3 s)
+        vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, held)
         return vn, dn, a, ok, False
     vn, dn = np.empty(dof), np.empty(dof)
     for i in range(dof):

@@ -61,6 +61,7 @@ def _batch(name: str, fn, config: EnvelopeConfig) -> Batch:
         source=config.source + on_model(config.model),
         unit="cells",
         outcome=_outcome,
+        kernel=("scores", "plan", "predictors"),
     )
 
 

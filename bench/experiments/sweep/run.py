@@ -85,7 +85,9 @@ def first_estimate_s(steps: float, workers: int, *, compile_s: float | None = No
     if compile_s is None:
         from slopewalk.planner.kernel import cache
 
-        compile_s = cache.cold_seconds("plan", "predictors")
+        compile_s = cache.cold_seconds(
+            "plan", "predictors", slots=min(workers, os.cpu_count() or 1)
+        )
     return steps * step_seconds() / max(workers, 1) + WORKER_START_S + compile_s
 
 
@@ -137,6 +139,7 @@ SWEEP_BATCH = Batch(
     is_error=lambda row: row["simulated_verdict"] == "error",
     source="the sweep file",
     unit="trials",
+    kernel=("plan", "predictors"),
 )
 __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep"]
 

@@ -1,0 +1,100 @@
+"""Compiling a command's kernel entries side by side (planner/kernel/warm.py): what the
+entries' processes compile is what a trial then calls, so a trial after them compiles
+nothing (a wrong type would compile a second signature, and cost the time saved)."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.gait import GaitParams
+from slopewalk.planner.kernel import cache, dynamics, rocking, servo, warm
+
+TOP = (servo.integrate, servo.fixed_point, dynamics.linearised, dynamics.rows, rocking.rocking_loop)
+
+
+def test_the_predictors_warm_up_calls_the_signatures_a_trial_calls(spec):
+    warm.compile_entry("predictors")
+    run_trial(spec, TrialSpec(GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10))))
+    for function in TOP:
+        assert len(function.signatures) == 1, (function.__name__, function.signatures)
+
+
+def test_one_cold_entry_is_left_to_its_first_use(tmp_path, monkeypatch):
+    """Side by side needs two cold entries: one alone compiles where it is first called."""
+    monkeypatch.setattr(cache, "_root", lambda: str(tmp_path))
+    mark = cache.ENTRIES["plan"].mark()
+    mark.parent.mkdir(parents=True)
+    mark.touch()
+    assert cache.prepare("plan", "predictors") == 0.0  # returns at once, nothing spawned
+    alone = cache.ENTRIES["predictors"].seconds
+    assert cache.cold_seconds("plan", "predictors", slots=2) == alone
+    mark.unlink()
+    both = cache.cold_seconds("plan", "predictors", slots=2)
+    assert both == (alone + cache.ENTRIES["plan"].seconds) / 2
+
+
+class _Done:
+    """A finished entry process (``cache._spawn``'s stand-in: its compiling is not the point)."""
+
+    def __init__(self, name, spawned):
+        spawned.append(name)
+        cache.ENTRIES[name].mark().touch()
+
+    def wait(self):
+        return 0
+
+    def poll(self):
+        return 0
+
+
+def test_a_cold_command_compiles_its_entries_side_by_side_and_says_so_once(
+    tmp_path, monkeypatch, capsys
+):
+    monkeypatch.setattr(cache, "_root", lambda: str(tmp_path))
+    monkeypatch.setattr(cache, "_WARM", set())
+    monkeypatch.setattr(cache, "_EXPECTED", [("plan", "predictors")])
+    spawned: list[str] = []
+    monkeypatch.setattr(cache, "_spawn", lambda name: _Done(name, spawned))
+    monkeypatch.setattr(cache.os, "cpu_count", lambda: 2)
+    seconds = cache.cold_seconds("plan", "predictors", slots=2)
+    cache.first_use("plan")
+    cache.first_use("predictors")
+    assert sorted(spawned) == ["plan", "predictors"]
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)"]
+
+
+_AFTER = """
+import json, sys
+from numba.core import event
+from slopewalk.planner.kernel import cache
+cache.prepare("plan", "predictors", workers=2)
+seen = []
+class Listener(event.Listener):
+    def on_start(self, e): seen.append(e.data["dispatcher"].py_func.__qualname__)
+    def on_end(self, e): pass
+event.register("numba:compile", Listener())
+from slopewalk.planner.spec import load_spec
+from slopewalk.planner.gait import GaitParams
+from slopewalk.bench.sim.trial import run_trial
+from slopewalk.bench.sim.trial_spec import TrialSpec
+spec = load_spec()
+run_trial(spec, TrialSpec(GaitParams.nominal(spec, 1.0, steps=2)))
+print(json.dumps(seen))
+"""
+
+
+@pytest.mark.slow
+def test_after_the_entries_side_by_side_a_trial_compiles_nothing(tmp_path):
+    """On an empty cache (~40 s of compiling on 2 cores)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    out = subprocess.run(
+        [sys.executable, "-c", _AFTER], env=env, capture_output=True, text=True, check=True
+    )
+    assert json.loads(out.stdout.splitlines()[-1]) == []
