@@ -11,6 +11,9 @@ entry's, not the sum. The predictors' process first compiles what needs nothing 
 plan's kernel (the servo loop's ``integrate``, ``rocking``), then the dynamics, which
 call the per-block stages of ``sample`` the plan's process compiles meanwhile and
 caches (where it has not yet, both compile them: the same code, the later write wins).
+Beside the plan's, a GA's scores' process (``slopewalk optimize``: "scores" and "plan")
+compiles the stages the plan's does not (measured: the plan's process then 14 s of CPU,
+finding them cached, where alone it takes ~18 s).
 
 ``compile_entry`` calls each entry's compiled functions on small inputs of the types the
 predictors give them (tests/planner/test_kernel_warm.py holds a trial after it to
@@ -34,6 +37,12 @@ _PLAN_STAGES = {
     "write_rows": f"({_F1}, {_F1}, int64, {_F1}, {_F2}, {_I1})",
 }
 _PREDICTOR_STAGES = {"_outward": f"({_F3}, {_F2}, {_F1}, int64, {_F1})"}
+# A GA's scores call the plan's stages through the same ``evaluate_loaded``: beside the
+# plan's process (``slopewalk optimize``, ``bands``) the scores' compiles the others
+_SCORES_STAGES = _PREDICTOR_STAGES | {
+    "_gait_ik": f"({_F1}, {_F1}, {_F1}, int64, {_F1})",
+    "_margin": f"({_F1}, int64, int64, {_F1})",
+}
 
 
 def _stages(signatures: dict[str, str]) -> None:
@@ -102,6 +111,7 @@ def compile_entry(name: str) -> None:
             _stages(_PLAN_STAGES)
             plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
         else:
+            _stages(_SCORES_STAGES)
             gait = GaitParams.nominal(spec, 1.0, steps=1, dt=0.01)
             evaluate(spec, gait, np.array([[0.2, 0.06, 0.2]]))
     cache.compiled(name)
