@@ -245,7 +245,8 @@ def sim_figures() -> dict:
     """Raw mj_step rate of the trial scene vs a whole trial's rate, measured in one run.
 
     ``trial_steps_per_s`` covers planning, the rollout, sensor decoding, event
-    detection and the comparison; ``rollout_steps_per_s`` plays a batch of trials
+    detection and the comparison; ``cpu_ratio`` the same in CPU time, which moves less
+    with the machine's other load; ``rollout_steps_per_s`` plays a batch of trials
     through ``mujoco.rollout`` on 2 threads.
     """
     from slopewalk.bench.sim.playback import play_many
@@ -261,6 +262,8 @@ def sim_figures() -> dict:
         holder["result"] = run_trial(spec, TrialSpec(params))
 
     trial_s = _best_of(trial, 3)
+    trial_cpu_s = _best_of(trial, 3, clock=time.process_time)  # every thread's CPU time
+    raw_cpu_rate = raw_step_rate(clock=time.process_time)
     steps = holder["result"].sim_steps
     batch = [
         plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME, hip_height=hz))
@@ -275,6 +278,9 @@ def sim_figures() -> dict:
         "raw_steps_per_s": raw_rate,
         "trial_steps_per_s": trial_rate,
         "ratio": trial_rate / raw_rate,
+        "trial_steps_per_cpu_s": steps / trial_cpu_s,
+        "raw_steps_per_cpu_s": raw_cpu_rate,
+        "cpu_ratio": steps / trial_cpu_s / raw_cpu_rate,
         "rollout_trials": len(batch),
         "rollout_threads": 2,
         "rollout_steps_per_s": len(batch) * steps / batch_s,
