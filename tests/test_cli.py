@@ -114,6 +114,13 @@ def _until(fd: int, marker: bytes | None, timeout: float) -> bytes:
     return seen
 
 
+def _sigint_default() -> None:
+    """In the child, before exec: Ctrl-C's default action, as a terminal's shell gives it.
+    A test run started in the background of a non-interactive shell inherits SIGINT
+    ignored, and Python keeps an inherited ignore: the command would never see it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("delay", [0.3, 0.9, 1.7])
 def test_ctrl_c_during_optimize_is_one_line_and_130(delay, tmp_path):
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) while the GA runs.
@@ -130,7 +137,7 @@ def test_ctrl_c_during_optimize_is_one_line_and_130(delay, tmp_path):
         [sys.executable, "-m", "slopewalk.bench.cli", "optimize", "--slope", "10",
          "--generations", "100000", "--out", str(out)],
         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=terminal,
-        start_new_session=True, cwd=tmp_path,
+        start_new_session=True, cwd=tmp_path, preexec_fn=_sigint_default,
     )  # fmt: skip
     os.close(terminal)
     try:
