@@ -241,12 +241,17 @@ def raw_step_rate(steps: int = 5000, repeats: int = 3, *, clock=time.perf_counte
     return steps / best
 
 
+PAIRS = 5  # raw-and-trial pairs of ``sim_figures``' paired_ratio
+
+
 def sim_figures() -> dict:
     """Raw mj_step rate of the trial scene vs a whole trial's rate, measured in one run.
 
     ``trial_steps_per_s`` covers planning, the rollout, sensor decoding, event
     detection and the comparison; ``cpu_ratio`` the same in CPU time, which moves less
-    with the machine's other load; ``rollout_steps_per_s`` plays a batch of trials
+    with the machine's other load; ``paired_ratio`` the median of ``PAIRS`` ratios, each
+    of a raw run and a trial back to back (the best-of rates above can come from
+    moments of different load); ``rollout_steps_per_s`` plays a batch of trials
     through ``mujoco.rollout`` on 2 threads.
     """
     from slopewalk.bench.sim.playback import play_many
@@ -262,9 +267,17 @@ def sim_figures() -> dict:
         holder["result"] = run_trial(spec, TrialSpec(params))
 
     trial_s = _best_of(trial, 3)
-    trial_cpu_s = _best_of(trial, 3, clock=time.process_time)  # every thread's CPU time
+    trial_cpu_s = _best_of(trial, 3, clock=time.process_time)  # this process's CPU time
     raw_cpu_rate = raw_step_rate(clock=time.process_time)
     steps = holder["result"].sim_steps
+
+    def paired() -> float:  # raw stepping, then a trial, back to back: under one load
+        raw = raw_step_rate(steps, 1)
+        start = time.perf_counter()
+        trial()
+        return steps / (time.perf_counter() - start) / raw
+
+    paired_ratio = float(np.median([paired() for _ in range(PAIRS)]))
     batch = [
         plan_walk(spec, GaitParams.nominal(spec, NOMINAL_STEP_TIME, hip_height=hz))
         for hz in np.linspace(0.19, 0.21, 8)
@@ -281,6 +294,7 @@ def sim_figures() -> dict:
         "trial_steps_per_cpu_s": steps / trial_cpu_s,
         "raw_steps_per_cpu_s": raw_cpu_rate,
         "cpu_ratio": steps / trial_cpu_s / raw_cpu_rate,
+        "paired_ratio": paired_ratio,
         "rollout_trials": len(batch),
         "rollout_threads": 2,
         "rollout_steps_per_s": len(batch) * steps / batch_s,
