@@ -256,15 +256,9 @@ def swing_reach(plan, axis: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rocking(
-    plan,
-    axis: int,
-    zmp=None,
-    clearance=None,
-    floor_stiffness=None,
-    moments=None,
-    props=None,
+    plan, axis: int, zmp=None, clearance=None, floor_stiffness=None, moments=None, props=None,
     compiled=True,
-) -> np.ndarray:
+) -> np.ndarray:  # fmt: skip
     """Signed tilt of the robot on its support about ``axis``'s lines [rad], (n,) (module doc).
 
     Args:
@@ -305,23 +299,19 @@ def rocking(
     flat_give = compliance * (np.clip(z, lower, upper) - centroid)
     series = (lines, inertia, stiffness, z, normal, com, compliance, centroid, flat_give, reach)
     propped = np.zeros(plan.t.size, dtype=np.bool_)
-    if not compiled:
-        theta = _rocking_loop(*series, single, height, dt, mass, propped)
-        if props is not None:
-            props |= propped
-        return theta
-    from slopewalk.planner.kernel.rocking import rocking_loop
+    if compiled:
+        from slopewalk.planner.kernel.rocking import rocking_loop
 
-    # one layout and dtype per argument: one compiled signature
-    arrays = [
-        np.ascontiguousarray(np.stack(a) if isinstance(a, tuple) else a, dtype=float)
-        for a in series
-    ]
-    single = np.ascontiguousarray(single, dtype=np.bool_)
-    theta = rocking_loop(
-        *arrays, single, np.ascontiguousarray(height, dtype=float), dt, float(mass), FALLEN,
-        propped,
-    )  # fmt: skip
+        # one layout and dtype per argument: one compiled signature
+        arrays = [
+            np.ascontiguousarray(np.stack(a) if isinstance(a, tuple) else a, dtype=float)
+            for a in series
+        ]
+        single = np.ascontiguousarray(single, dtype=np.bool_)
+        height = np.ascontiguousarray(height, dtype=float)
+        theta = rocking_loop(*arrays, single, height, dt, float(mass), FALLEN, propped)
+    else:
+        theta = _rocking_loop(*series, single, height, dt, mass, propped)
     if props is not None:
         props |= propped
     return theta

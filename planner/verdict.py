@@ -162,10 +162,7 @@ def swing_drag_events(plan, props: np.ndarray) -> list[PredictedEvent]:
         props: Boolean (n,): the samples at which the swing sole props the rocking
             (``tip_events``' ``props``).
     """
-    edges = np.diff(np.concatenate([[0], props.astype(np.int8), [0]]))
-    xy = plan.swing_sole[:, :2]
-    for start, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-        moved = np.hypot(*(xy[start:end] - xy[start]).T)
+    for start, moved in slide_runs(props, plan.swing_sole[:, :2]):
         past = np.flatnonzero(moved > SLIP_DISTANCE)
         if past.size:
             k = start + int(past[0])
@@ -270,9 +267,16 @@ def _loaded_runs(plan):
     """(first sample, distance moved since it) of each DSP run where the second foot is loaded."""
     weight = plan.spec.total_mass * GRAVITY
     loaded = plan.double_support & (plan.swing_force[:, 2] > LOADED_FRACTION * weight)
-    edges = np.diff(np.concatenate([[0], loaded.astype(int), [0]]))
+    return slide_runs(loaded, plan.swing_sole[:, :2])
+
+
+def slide_runs(mask, xy):
+    """(first sample, distance [m] moved since it, per sample of the run) of each run of
+    True in ``mask`` (n,), for the path ``xy`` [m], (n, 2): how the simulator measures a
+    loaded sole's slide (``bench/sim/events.py``) and how the predictions do."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(np.int8), [0]]))
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-        yield a, np.hypot(*(plan.swing_sole[a:b, :2] - plan.swing_sole[a, :2]).T)
+        yield int(a), np.hypot(*(xy[a:b] - xy[a]).T)
 
 
 def strike_events(walk, stiffness: float) -> list[PredictedEvent]:

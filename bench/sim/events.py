@@ -35,7 +35,7 @@ from slopewalk.planner.joints import MJCF_JOINTS
 
 # SLIP_DISTANCE, LOADED_FRACTION, TIP_ANGLE: one definition with the analytic prediction's
 # (planner/verdict.py), their basis stated above.
-from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE
+from slopewalk.planner.verdict import LOADED_FRACTION, SLIP_DISTANCE, TIP_ANGLE, slide_runs
 
 # SATURATION: one definition with the strict walk's overload (planner/walk_prediction.py).
 from slopewalk.planner.walk_prediction import SATURATION
@@ -147,10 +147,7 @@ def verdict(events: list[Event]) -> str:
 
 def _slips(t, sole_xy, loaded, name) -> list[Event]:
     """First time a loaded foot's sole moved more than SLIP_DISTANCE since loading."""
-    edges = np.diff(np.concatenate([[0], loaded.astype(int), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    for a, b in zip(starts, ends, strict=True):
-        moved = np.hypot(*(sole_xy[a:b] - sole_xy[a]).T)
+    for a, moved in slide_runs(loaded, sole_xy):
         over = np.flatnonzero(moved > SLIP_DISTANCE)
         if over.size:
             k = a + over[0]
