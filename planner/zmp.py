@@ -175,20 +175,23 @@ def signed_margin(points, polygon) -> np.ndarray:
     Returns:
         Margin, shape (n,); NaN where the point is NaN.
     """
-    a = polygon
-    b = np.roll(polygon, -1, axis=1)
-    edge = b - a
-    length = np.hypot(edge[..., 0], edge[..., 1])
+    # per coordinate on contiguous (V, n) arrays: the same products and sums as on
+    # (n, V, 2) (the projection's 0 + r_x e_x + r_y e_y is einsum's), each minimum over
+    # the vertices an element-wise one of V rows; ~2x faster
+    p = np.asarray(points, dtype=float)
+    px, py = p[:, 0], p[:, 1]
+    ax, ay = (np.ascontiguousarray(np.asarray(polygon, dtype=float)[..., k].T) for k in (0, 1))
+    ex, ey = np.roll(ax, -1, axis=0) - ax, np.roll(ay, -1, axis=0) - ay
+    length = np.hypot(ex, ey)
     valid = length > 1e-12
     safe = np.where(valid, length, 1.0)
-    rel = points[:, None, :] - a
+    rx, ry = px - ax, py - ay
     # inward normal of a counter-clockwise edge is its left normal (−e_y, e_x)
-    inside_dist = (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0]) / safe
+    inside_dist = (ex * ry - ey * rx) / safe
     inside_dist = np.where(valid, inside_dist, np.inf)
-    line_min = inside_dist.min(axis=1)
-    s = np.clip(np.einsum("nvi,nvi->nv", rel, edge) / np.where(valid, safe**2, 1.0), 0.0, 1.0)
-    closest = a + s[..., None] * edge
-    seg = np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)).min(axis=1)
+    line_min = inside_dist.min(axis=0)
+    s = np.clip((0.0 + rx * ex + ry * ey) / np.where(valid, safe**2, 1.0), 0.0, 1.0)
+    seg = np.hypot(px - (ax + s * ex), py - (ay + s * ey)).min(axis=0)
     return np.where(line_min >= 0, line_min, -seg)
 
 
