@@ -28,11 +28,14 @@ _EPS = 2.220446049250313e-16  # float64 machine epsilon (numpy's lstsq cut-off: 
 
 
 @njit(**_KW)
-def _solve(a, b):
-    """x of a x = b by LU with partial pivoting (LAPACK's ``gesv``, unblocked), and
-    whether a is regular: False where a pivot is below 1e-13 of a's largest entry."""
+def _lu(a):
+    """LU with partial pivoting of a (LAPACK's ``getrf``, unblocked): the factors in one
+    matrix (L's multipliers below the diagonal), the row swapped into each column, and
+    whether a is regular: False where a pivot is below 1e-13 of a's largest entry (the
+    factors are then unfinished)."""
     n = a.shape[0]
-    a, x = a.copy(), b.copy()
+    a = a.copy()
+    pivot = np.empty(n, dtype=np.int64)
     scale = 0.0
     for r in range(n):
         for c in range(n):
@@ -42,24 +45,50 @@ def _solve(a, b):
         for r in range(c + 1, n):
             if abs(a[r, c]) > abs(a[p, c]):
                 p = r
+        pivot[c] = p
         if not abs(a[p, c]) > 1e-13 * scale:
-            return x, False
+            return a, pivot, False
         if p != c:
             for k in range(n):
                 a[c, k], a[p, k] = a[p, k], a[c, k]
-            x[c], x[p] = x[p], x[c]
         for r in range(c + 1, n):
             f = a[r, c] / a[c, c]
             a[r, c] = f
             for k in range(c + 1, n):
                 a[r, k] -= f * a[c, k]
-            x[r] -= f * x[c]
+    return a, pivot, True
+
+
+@njit(**_KW)
+def _lu_solve(lu, pivot, b):
+    """x of a x = b from ``_lu``'s factors (``getrs``): the row swaps, then L's
+    elimination column by column, then back substitution; each entry of b meets the same
+    operations in the same order as in an elimination made beside the factorisation."""
+    n = lu.shape[0]
+    x = b.copy()
+    for c in range(n):
+        p = pivot[c]
+        if p != c:
+            x[c], x[p] = x[p], x[c]
+    for c in range(n):
+        for r in range(c + 1, n):
+            x[r] -= lu[r, c] * x[c]
     for c in range(n - 1, -1, -1):
         s = x[c]
         for k in range(c + 1, n):
-            s -= a[c, k] * x[k]
-        x[c] = s / a[c, c]
-    return x, True
+            s -= lu[c, k] * x[k]
+        x[c] = s / lu[c, c]
+    return x
+
+
+@njit(**_KW)
+def _solve(a, b):
+    """x of a x = b by LU with partial pivoting (LAPACK's ``gesv``, unblocked: ``_lu``,
+    ``_lu_solve``), and whether a is regular (``_lu``)."""
+    lu, pivot, ok = _lu(a)
+    if not ok:
+        return b.copy(), False
+    return _lu_solve(lu, pivot, b), True
 
 
 @njit(**_KW)
@@ -111,15 +140,16 @@ def _landed(mass, jac, rate):
     if not moving:
         return rate, True
     mj = np.empty((dof, rows))
-    ok = True
+    lu, pivot, ok = _lu(mass)  # one factorisation for the rows' solves
+    if not ok:
+        return rate, False
     row = np.empty(dof)
     for r in range(rows):
         for k in range(dof):
             row[k] = jac[r, k]
-        col, good = _solve(mass, row)
+        col = _lu_solve(lu, pivot, row)
         for k in range(dof):
             mj[k, r] = col[k]
-        ok = ok and good
     jmj = np.zeros((rows, rows))
     for r in range(rows):
         for s in range(rows):

@@ -125,14 +125,37 @@ def test_compiled_fixed_point_is_the_numpy_one(spec, plan):
 
 
 @settings(max_examples=20, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 12))
-def test_the_lu_solve_is_numpys_on_regular_systems(seed, n):
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 12), order=st.randoms())
+def test_the_lu_solve_is_numpys_on_regular_systems(seed, n, order):
+    """Diagonally dominant rows shuffled: every column's pivot lies on another row, so the
+    row swaps (and how the solve replays them, ``_lu_solve``) are exercised."""
     rng = np.random.default_rng(seed)
-    a = rng.standard_normal((n, n)) + n * np.eye(n)
+    rows = list(range(n))
+    order.shuffle(rows)
+    a = (rng.standard_normal((n, n)) + n * np.eye(n))[rows]
     b = rng.standard_normal(n)
     x, ok = servo._solve(a, b)
     assert ok
+    # LU with partial pivoting on a well-conditioned matrix: a residual of rounding size
     np.testing.assert_allclose(a @ x, b, rtol=0, atol=1e-12 * n * np.abs(b).max())
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(1, 4))
+def test_the_landing_impulse_stops_the_sole(seed, rows):
+    """``_landed`` (one factorisation, several solves) against the impulse's closed form:
+    J q̇⁺ = 0, and q̇⁺ − q̇ = M⁻¹ Jᵀ p, on a mass matrix whose rows need swapping."""
+    rng = np.random.default_rng(seed)
+    root = rng.standard_normal((8, 8))
+    mass = root @ root.T + np.eye(8)
+    mass[[0, 7]] = mass[[7, 0]]  # not symmetric: the pivots lie off the diagonal
+    jac, rate = rng.standard_normal((rows, 8)), rng.standard_normal(8)
+    after, ok = servo._landed(mass, jac, rate)
+    assert ok
+    mj = np.linalg.solve(mass, jac.T)
+    want = rate - mj @ np.linalg.solve(jac @ mj, jac @ rate)
+    np.testing.assert_allclose(after, want, rtol=0, atol=1e-9 * np.abs(rate).max())
+    np.testing.assert_allclose(jac @ after, 0.0, atol=1e-9 * np.abs(jac @ rate).max())
 
 
 def test_a_singular_system_is_reported_not_solved():
