@@ -152,9 +152,7 @@ def _links(first, stop, com, inertia, n, w, run):
     for r in range(9):
         for j in range(n):
             w[sp._OMEGA + r * B + j] = run[r, j]
-    for i in range(1, sp.N_LINK):  # i from a literal 1 (``sample._outward``: it vectorises)
-        if first <= i < stop:
-            sp._link(i, com, inertia, n, w)
+    sp._links(first, stop, com, inertia, n, w)
 
 
 @njit(**_KW)

@@ -505,8 +505,19 @@ def _outward(com, inertia, gravity, n, w):
         w[_LK + _A + j], w[_LK + _A + B + j] = -gravity[0], -gravity[1]
         w[_LK + _A + 2 * B + j] = -gravity[2]
         w[_LK + _H + j] = w[_LK + _H + B + j] = w[_LK + _H + 2 * B + j] = 0.0
-    for i in range(1, N_LINK):
-        _link(i, com, inertia, n, w)
+    _links(1, N_LINK, com, inertia, n, w)
+
+
+@njit(**_KW)
+def _links(first, stop, com, inertia, n, w):
+    """Links first..stop − 1 of the outward recursion (``_link``), from the running ω, ω̇
+    and a − g the block holds at joint origin first − 1; 1 ≤ first. One compiled copy of
+    ``_link`` for ``_outward`` and for ``dynamics.linearised``'s partial passes (each
+    inlined copy costs seconds of compiling)."""
+    n = min(n, B)  # a bound on the trip count (module doc)
+    for i in range(1, N_LINK):  # i from a literal 1 (``_outward``: it vectorises)
+        if first <= i < stop:
+            _link(i, com, inertia, n, w)
 
 
 @njit(**_KW)
