@@ -112,8 +112,11 @@ class Entry:
     seconds: float
 
     def mark(self) -> Path:
-        """The file that says this entry's functions are in the cache."""
-        keys = "-".join(module_key(m) for m in self.modules)
+        """The file that says this entry's functions are in the cache: per kernel source
+        and per kernel folder, as numba files its cache under a hash of the folder's path
+        (a second checkout of the same sources compiles into a cache of its own)."""
+        folder = KernelLocator.get_suitable_cache_subpath(str(KERNEL / "run.py"))
+        keys = "-".join([folder, *(module_key(m) for m in self.modules)])
         root = Path(_root())
         return root / "compiled" / f"{self.name}-{hashlib.sha256(keys.encode()).hexdigest()[:16]}"
 

@@ -4,6 +4,7 @@ nothing (a wrong type would compile a second signature, and cost the time saved)
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -98,3 +99,17 @@ def test_after_the_entries_side_by_side_a_trial_compiles_nothing(tmp_path):
         [sys.executable, "-c", _AFTER], env=env, capture_output=True, text=True, check=True
     )
     assert json.loads(out.stdout.splitlines()[-1]) == []
+
+
+def test_a_second_checkout_of_the_same_kernel_is_cold(tmp_path, monkeypatch):
+    """numba files its cache under a hash of the kernel folder's path, so a clone elsewhere
+    compiles anew even with the same sources: its mark must not say it is compiled (it did,
+    and a fresh clone's sweep compiled silently in each worker, 75 s instead of 10)."""
+    monkeypatch.setattr(cache, "_root", lambda: str(tmp_path / "cache"))
+    here, key = cache.ENTRIES["predictors"].mark(), cache.module_key("servo")
+    copy = tmp_path / "clone" / "kernel"
+    shutil.copytree(cache.KERNEL, copy)
+    monkeypatch.setattr(cache, "KERNEL", copy)
+    elsewhere = cache.ENTRIES["predictors"].mark()
+    assert cache.module_key("servo") == key  # the same sources
+    assert elsewhere != here
