@@ -37,7 +37,9 @@ rotation: S is the world frame turned about its y axis by −θs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import numpy as np
 
@@ -107,7 +109,31 @@ def gravity_in_slope(slope: float, g: float = GRAVITY) -> np.ndarray:
     return rotation_slope_to_world(slope).T @ np.array([0.0, 0.0, -g])
 
 
-_CHAINS: dict[int, tuple[RobotSpec, Chain]] = {}  # Chain.from_spec's memory, by spec identity
+_Built = TypeVar("_Built")
+
+
+class SpecMemo(Generic[_Built]):
+    """What was built from each of the last few specs, by the spec's identity (a RobotSpec
+    is frozen; what is kept must only be read): ``Chain.from_spec``'s and
+    ``kernel.tables.ChainTable.of``'s memory."""
+
+    def __init__(self, size: int = 8):
+        self._kept: dict[int, tuple[RobotSpec, _Built]] = {}
+        self._size = size
+
+    def get(self, spec: RobotSpec, build: Callable[[RobotSpec], _Built]) -> _Built:
+        """``build(spec)``, or what it gave for this very spec before."""
+        hit = self._kept.get(id(spec))
+        if hit is not None and hit[0] is spec:
+            return hit[1]
+        built = build(spec)
+        if len(self._kept) >= self._size:
+            self._kept.pop(next(iter(self._kept)))
+        self._kept[id(spec)] = (spec, built)
+        return built
+
+
+_CHAINS: SpecMemo[Chain] = SpecMemo()  # Chain.from_spec's memory
 
 
 @dataclass(frozen=True)
@@ -144,16 +170,15 @@ class Chain:
     def from_spec(cls, spec: RobotSpec) -> Chain:
         """The chain of ``spec``, remembered for the last few specs (a RobotSpec is frozen;
         the arrays are read-only): a trial asks for it ~9 times, 1.3 ms each."""
-        hit = _CHAINS.get(id(spec))
-        if hit is not None and hit[0] is spec:
-            return hit[1]
+        return _CHAINS.get(spec, cls._read_only)
+
+    @classmethod
+    def _read_only(cls, spec: RobotSpec) -> Chain:
+        """``_build`` with every array made read-only (the chain is shared)."""
         chain = cls._build(spec)
         for value in vars(chain).values():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
-        if len(_CHAINS) >= 8:
-            _CHAINS.pop(next(iter(_CHAINS)))
-        _CHAINS[id(spec)] = (spec, chain)
         return chain
 
     @classmethod

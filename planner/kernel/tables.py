@@ -26,7 +26,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from slopewalk.planner.joints import LEFT, RIGHT
-from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.kinematics import Chain, SpecMemo
 from slopewalk.planner.sole import MAX_SOLE_VERTICES, edge_normals, outline
 from slopewalk.planner.spec import RobotSpec
 from slopewalk.planner.trajectory import Timeline
@@ -228,14 +228,7 @@ class ChainTable:
         """The table of ``spec``, remembered for the last few specs as ``Chain.from_spec``
         does (a RobotSpec is frozen; the kernel only reads the arrays): a trial asks for it
         5 times, 0.3-0.8 ms each."""
-        hit = _TABLES.get(id(spec))
-        if hit is not None and hit[0] is spec:
-            return hit[1]
-        table = cls._build(spec)
-        if len(_TABLES) >= 8:
-            _TABLES.pop(next(iter(_TABLES)))
-        _TABLES[id(spec)] = (spec, table)
-        return table
+        return _TABLES.get(spec, cls._build)
 
     @classmethod
     def _build(cls, spec: RobotSpec) -> ChainTable:
@@ -278,7 +271,7 @@ class ChainTable:
         )
 
 
-_TABLES: dict[int, tuple[RobotSpec, ChainTable]] = {}  # ChainTable.of's memory, by spec identity
+_TABLES: SpecMemo[ChainTable] = SpecMemo()  # ChainTable.of's memory
 
 
 def grid_samples(table: GaitTable, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
