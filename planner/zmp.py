@@ -188,11 +188,17 @@ def signed_margin(points, polygon) -> np.ndarray:
     rx, ry = px - ax, py - ay
     # inward normal of a counter-clockwise edge is its left normal (−e_y, e_x)
     inside_dist = (ex * ry - ey * rx) / safe
-    inside_dist = np.where(valid, inside_dist, np.inf)
-    line_min = inside_dist.min(axis=0)
-    s = np.clip((0.0 + rx * ex + ry * ey) / np.where(valid, safe**2, 1.0), 0.0, 1.0)
-    seg = np.hypot(px - (ax + s * ex), py - (ay + s * ey)).min(axis=0)
-    return np.where(line_min >= 0, line_min, -seg)
+    inside_dist[~valid] = np.inf
+    margin = inside_dist.min(axis=0)
+    # outside (or NaN): minus the distance to the nearest edge segment, computed for those
+    # points' columns only (most ZMPs are inside; the same operations on each element)
+    away = ~(margin >= 0)
+    if away.any():
+        ex, ey, ax, ay, rx, ry = (v[:, away] for v in (ex, ey, ax, ay, rx, ry))
+        square = np.where(valid[:, away], safe[:, away] ** 2, 1.0)
+        s = np.clip((0.0 + rx * ex + ry * ey) / square, 0.0, 1.0)
+        margin[away] = -np.hypot(px[away] - (ax + s * ex), py[away] - (ay + s * ey)).min(axis=0)
+    return margin
 
 
 def axis_margins(points, polygon) -> tuple[np.ndarray, np.ndarray]:
