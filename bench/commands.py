@@ -446,7 +446,22 @@ def compare(args: argparse.Namespace) -> None:
         raise SystemExit(1)
 
 
+# a local batch's workers are forked from a server that imports these once (the job's
+# module, a trial's kernel entries); started first, it imports beside this process
+_SWEEP_SERVER = ("slopewalk.bench.experiments.sweep.run", "slopewalk.planner.kernel.preload")
+_ENVELOPE_SERVER = ("slopewalk.bench.experiments.envelope.run", "slopewalk.planner.kernel.preload")
+
+
+def _start_workers_server(args: argparse.Namespace, modules: tuple[str, ...]) -> None:
+    """Start the fork server of a local batch's workers now (``executor.start_server``)."""
+    if args.cluster is None:
+        from slopewalk.bench.batch.executor import start_server
+
+        start_server(modules)
+
+
 def sweep(args: argparse.Namespace) -> None:
+    _start_workers_server(args, _SWEEP_SERVER)
     from pathlib import Path
 
     from slopewalk.bench.experiments.sweep.config import SweepError, load_sweep
@@ -657,6 +672,7 @@ def _envelope_gaits(args: argparse.Namespace):
 
 
 def envelope(args: argparse.Namespace) -> None:
+    _start_workers_server(args, _ENVELOPE_SERVER)
     from pathlib import Path
 
     from slopewalk.bench.experiments.envelope.config import EnvelopeError, load_envelope

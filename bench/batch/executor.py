@@ -8,9 +8,16 @@ lazily from an iterable (a million-job grid is never held as a list).
 
 Two ways to run them:
 
-- ``LocalPool``: worker processes started with ``spawn`` (a fresh interpreter:
-  they inherit no file descriptor, so never the lock of a results table, which
-  an ``flock`` shares with every process that holds the same open file). Each
+- ``LocalPool``: worker processes forked from one server process
+  (``multiprocessing``'s ``forkserver``; ``spawn`` where there is none). The server is
+  a fresh interpreter, as a spawned worker is: it and the workers forked from it
+  inherit no file descriptor of the caller, so never the lock of a results table,
+  which an ``flock`` shares with every process that holds the same open file. The
+  server imports, once, the job function's module and the pool's ``preload`` modules
+  (``SERVER_PRELOAD`` first, which ties the server's life to the caller's), so a
+  worker starts without the ~1.3 s of imports a spawned one pays each time, and
+  ``start_server`` lets a command start it before its own imports, so the two import
+  side by side. Each
   worker is given one job at a time over its own pipe, so when a worker dies
   (a segfault in a native library, ``os._exit``, the OOM killer, ``kill -9``)
   the pool knows which job it held: that job comes back as a ``Lost`` with the
@@ -59,6 +66,8 @@ from typing import Any
 from slopewalk.planner.errors import SlopewalkError
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
+START_METHOD = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+SERVER_PRELOAD = "slopewalk.bench.batch.server"  # the server dies with its caller (module doc)
 PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fallback)
 WAIT_S = 0.5  # [s] longest wait of the main loop before it looks again
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -196,19 +205,58 @@ def death_cause(exitcode: int | None) -> str:
     return f"worker died: exit code {exitcode}"
 
 
+def start_server(modules: Iterable[str]) -> None:
+    """Start the fork server of this process's pools now, importing ``modules`` once
+    (after ``SERVER_PRELOAD``; ``__main__`` is left out: a script's top level is not an
+    import). Where it runs already, nothing changes: it keeps what it imported. The
+    server and its workers end with this process. No server without ``forkserver``."""
+    if START_METHOD != "forkserver":
+        return
+    from multiprocessing import forkserver
+
+    names = [SERVER_PRELOAD, *dict.fromkeys(m for m in modules if m != "__main__")]
+    forkserver.set_forkserver_preload(names)  # used only by the start below, if it starts
+    forkserver.ensure_running()
+
+
+def stop_server() -> None:
+    """End this process's fork server, if it runs, and wait for it: the CPU time of the
+    workers it forked then counts in this process's ``RUSAGE_CHILDREN`` (the benchmarks),
+    and the next pool starts a fresh one."""
+    if START_METHOD == "forkserver":
+        from multiprocessing import forkserver
+
+        forkserver._forkserver._stop()  # the one way there is (CPython's own tests use it)
+
+
 # --- the worker side ------------------------------------------------------------------------------
 
 
 def _die_with_parent(parent_pid: int) -> None:
-    """Make this process end when ``parent_pid`` does: PR_SET_PDEATHSIG, and a watching thread."""
+    """Make this process end when ``parent_pid`` does: PR_SET_PDEATHSIG on the process that
+    forked it (the fork server, which dies with ``parent_pid``: ``server.py``; or
+    ``parent_pid`` itself, spawned), and a thread that watches both."""
     with contextlib.suppress(Exception):  # not Linux, or no libc: the thread below still watches
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent_pid:  # the parent died before the line above
+    server = os.getppid()  # the main process, or the fork server it started
+
+    def alive() -> bool:
+        if os.getppid() != server:
+            return False
+        try:
+            os.kill(parent_pid, 0)
+        except ProcessLookupError:
+            return False
+        except OSError:
+            pass
+        return True
+
+    if not alive():  # the parent died before the line above
         os._exit(1)
 
     def watch():
-        while os.getppid() == parent_pid:
+        while alive():
             time.sleep(PARENT_POLL_S)
         os._exit(1)
 
@@ -266,17 +314,19 @@ class LocalPool:
     Use as a context manager; leaving it kills the workers at once.
     """
 
-    def __init__(self, fn: Callable, *, workers: int | None = None):
+    def __init__(self, fn: Callable, *, workers: int | None = None, preload: tuple[str, ...] = ()):
         """
         Args:
             fn: A top-level function (picklable by reference); called as ``fn(*args)``.
             workers: Worker processes (default ``os.cpu_count()``), >= 1.
+            preload: Modules the fork server imports after ``fn``'s (``start_server``).
         """
         self.fn = fn
         self.workers = workers or os.cpu_count() or 1
         if self.workers < 1:
             raise ExecutorError(f"workers = {self.workers}: must be >= 1")
-        self._context = multiprocessing.get_context("spawn")
+        self._context = multiprocessing.get_context(START_METHOD)
+        start_server((fn.__module__, *preload))
         self._pool: list[_Worker] = []
         self._failed_starts = 0  # in a row; a few are a killed worker, more a broken install
 

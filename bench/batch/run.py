@@ -163,8 +163,10 @@ def run_batch(
 
             cache.prepare(*batch.kernel, workers=workers)
         # a cluster sets its window from its workers' threads, never from this machine's cores
+        # a kernel batch's workers' server loads a trial's compiled entries once for them all
+        preload = ("slopewalk.planner.kernel.preload",) if batch.kernel else ()
         pool = (
-            LocalPool(batch.fn, workers=workers)
+            LocalPool(batch.fn, workers=workers, preload=preload)
             if executor is None
             else FuturesPool(batch.fn, executor)
         )

@@ -1,6 +1,6 @@
 """An imported model as a batch job carries it: ``sweep``/``envelope --model``.
 
-A job travels to a worker (a spawned local process or a Dask cluster's) as a pickle,
+A job travels to a worker (a local worker process or a Dask cluster's) as a pickle,
 so it carries the model by name, never as a compiled ``MjModel``: the model file's and
 the map file's **absolute** paths (a worker's working directory is not the client's)
 and a sha256 over their contents (``digest``). A worker fits the model from those paths

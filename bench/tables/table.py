@@ -11,8 +11,8 @@ can leave a last line without its newline; opening the partial table again
 cuts that torn line off, and its row runs again. A row appended again for the
 same id (a re-run for a missing recording) replaces the earlier one. An
 exclusive ``flock`` keeps a second run from writing the same file at the same
-time; it lives with this process's open file (workers are spawned, so they hold
-no copy of it).
+time; it lives with this process's open file (workers start in a fresh interpreter:
+forked from a fork server that holds no file of ours, or spawned; they hold no copy of it).
 
 A file that is not such a table (binary, not UTF-8, no header, other columns,
 a line of the wrong width, a verdict that is not a verdict) is refused in one

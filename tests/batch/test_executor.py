@@ -14,6 +14,7 @@ import pytest
 from conftest import session_pids
 
 from slopewalk.bench.batch.executor import (
+    START_METHOD,
     FuturesPool,
     Interrupted,
     LocalPool,
@@ -21,7 +22,10 @@ from slopewalk.bench.batch.executor import (
     WorkerLost,
     death_cause,
     interruptible,
+    stop_server,
 )
+
+FORKSERVER = pytest.mark.skipif(START_METHOD != "forkserver", reason="no fork server here: spawn")
 
 
 def job(kind: str, value: int):
@@ -88,11 +92,72 @@ def test_workers_hold_no_file_of_the_parent(tmp_path):
     fcntl.flock(fd, fcntl.LOCK_EX)
     try:
         st = os.fstat(fd)
+        stop_server()  # the workers' fork server starts now, while the lock is held
         with LocalPool(open_inodes, workers=1) as pool:
             [(_, inodes)] = list(pool.run([("fds", ("", 0))]))
     finally:
         os.close(fd)
     assert (st.st_dev, st.st_ino) not in inodes  # so never the table's flock
+
+
+def imported(_kind: str, module: str) -> tuple[bool, int]:
+    """Whether ``module`` is imported in this worker before its job, and the worker's pid."""
+    return module in sys.modules, os.getpid()  # the pid: a job's worker, for a failure's say
+
+
+@FORKSERVER
+def test_workers_start_with_the_preload_their_server_imported():
+    stop_server()  # a fresh server, started by this pool with its preload
+    module = "mailbox"  # nothing of the job's module (nor of the server's own) imports it
+    jobs = [(str(i), ("", module)) for i in range(4)]
+    with LocalPool(imported, workers=2, preload=(module,)) as pool:
+        results = dict(pool.run(jobs))
+    assert len(results) == 4 and all(seen for seen, _ in results.values())
+
+
+SLOW_SERVER_SCRIPT = """
+import time
+from slopewalk.bench.batch.executor import start_server
+
+if __name__ == "__main__":
+    start_server(["slow_import"])  # the server sleeps 60 s importing it
+    print("started", flush=True)
+    time.sleep(60)
+"""
+
+
+@FORKSERVER
+def test_the_fork_server_dies_with_its_killed_caller_even_while_importing(tmp_path):
+    importing = tmp_path / "importing"
+    (tmp_path / "slow_import.py").write_text(
+        f"import pathlib, time\npathlib.Path({str(importing)!r}).touch()\ntime.sleep(60)\n"
+    )
+    script = tmp_path / "server.py"
+    script.write_text(SLOW_SERVER_SCRIPT)
+    path = os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))
+    proc = subprocess.Popen(  # the server finds slow_import on PYTHONPATH (its sys.path's)
+        [sys.executable, str(script)],
+        start_new_session=True,
+        stdout=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, PYTHONPATH=path),
+    )
+    try:
+        assert proc.stdout.readline() == "started\n"
+        deadline = time.monotonic() + 30
+        while not importing.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        # the caller, the resource tracker and the fork server, asleep in its import
+        assert len(session_pids(proc.pid)) == 3
+        proc.kill()
+        proc.wait()
+        deadline = time.monotonic() + 3
+        while session_pids(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert session_pids(proc.pid) == [], "the fork server outlived its caller"
+    finally:
+        for pid in session_pids(proc.pid):
+            os.kill(pid, signal.SIGKILL)
 
 
 def test_a_failed_future_is_lost_without_blame():
@@ -170,8 +235,9 @@ def test_busy_workers_die_with_their_killed_parent(tmp_path):
     try:
         assert proc.stdout.readline() == "running\n"
         deadline = time.monotonic() + 30
-        # the parent, its 2 workers and the resource tracker
-        while len(session_pids(proc.pid)) < 4 and time.monotonic() < deadline:
+        # the parent, its 2 workers, the resource tracker (and the workers' fork server)
+        least = 5 if START_METHOD == "forkserver" else 4
+        while len(session_pids(proc.pid)) < least and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(1.0)  # the workers are asleep in their 60 s jobs
         proc.kill()

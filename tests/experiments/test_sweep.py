@@ -60,8 +60,8 @@ def _gone(sid: int, within: float = 5.0) -> list[int]:
     return left
 
 
-def _workers(pid: int) -> list[int]:
-    """Pids of the spawned worker processes of ``pid``."""
+def _children(pid: int) -> list[tuple[int, bytes]]:
+    """(pid, cmdline) of the live child processes of ``pid``."""
     out = []
     for name in os.listdir("/proc"):
         if name.isdigit():
@@ -71,8 +71,19 @@ def _workers(pid: int) -> list[int]:
             except OSError:
                 continue
             ppid = int(stat[stat.rindex(")") + 2 :].split()[1])
-            if ppid == pid and b"spawn_main" in cmdline:
-                out.append(int(name))
+            if ppid == pid:
+                out.append((int(name), cmdline))
+    return out
+
+
+def _workers(pid: int) -> list[int]:
+    """Pids of the worker processes of ``pid``: forked by its fork server (or spawned by it)."""
+    out = []
+    for child, cmdline in _children(pid):
+        if b"spawn_main" in cmdline:
+            out.append(child)
+        elif b"multiprocessing.forkserver" in cmdline:
+            out += [worker for worker, _ in _children(child)]
     return out
 
 

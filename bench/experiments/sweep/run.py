@@ -3,7 +3,7 @@
 The sweep-specific half; the generic half (the resumable table run shared with
 ``slopewalk envelope``) is ``batch/run.py``, on top of ``batch/executor.py`` (workers, one
 job each at a time, worker deaths, signals) and ``progress.py``. Trials run as calls of
-the top-level ``run_one`` on local spawned workers (``LocalPool``) or on any
+the top-level ``run_one`` on local workers (``LocalPool``) or on any
 ``concurrent.futures`` executor, e.g. a Dask ``distributed.Client``'s
 (``--cluster ADDRESS``: ``batch/cluster.py``, fed by ``FuturesPool``).
 
@@ -66,7 +66,7 @@ ROLLOUT_RATE = 60_000.0  # [sim steps/s] per worker: the trial's mujoco.rollout 
 ANALYTIC_S_PER_STEP = 20e-6  # [s] per sim step: the rest of a trial - the plan, the
 # predictors (servo loop, compliance, tipping), decoding and comparison - all of which
 # scale with the walk's samples (1 ms, as the sim's steps): 37 us a step in all
-WORKER_START_S = 2.5  # [s] a worker's imports and cached-kernel loading
+WORKER_START_S = 2.5  # [s] the workers' imports and cached-kernel loading (their fork server's)
 
 
 def step_seconds() -> float:
