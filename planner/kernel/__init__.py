@@ -20,6 +20,16 @@ to a per-user folder under the temp directory if that one cannot be written. Eac
 kernel module is cached under a key of its own source and its kernel imports'
 (``cache``), so an edit recompiles only the modules that see it.
 
+Compile time (issue 24; ``tools/compile_profile.py`` prints it per function): numba
+compiles every ``@njit`` function a kernel function calls into an LLVM library of its
+own, optimised and turned into machine code, then links that library into each
+caller's and optimises and emits it again there, callee and all. A thin wrapper
+around the big per-block stages (``dynamics._pass``, ``sample.evaluate_loaded``) or
+a function in the middle of a deep chain (``servo._step``) so cost its callees'
+LLVM work once more, 1-2 s each: such functions are ``inline="always"`` (numba's IR,
+typed in each caller) and have no library of their own. The rest is numba's own
+Python, ~1 ms per typed operation, in type inference and lowering alike.
+
 The parallel kernels run on numba's OpenMP threading layer. GNU OpenMP's threads
 spin after each parallel region before they sleep, and a GA calls the kernel once
 per generation with a few ms of single-threaded Python (pymoo) in between: on a

@@ -54,7 +54,7 @@ def _load(q, qd, qdd, side, sole, share, start, n, w):
             _angle(w, i, j, q[k, i])
 
 
-@njit(**_KW)
+@njit(inline="always", **_KW)  # no library of its own (``kernel`` doc)
 def _pass(chain, gravity, n, w):
     """FK and Newton-Euler of the loaded block; torques in the ``sample._TAU`` rows."""
     geometry, dh_a, d5, mass, com, inertia = chain
@@ -65,7 +65,7 @@ def _pass(chain, gravity, n, w):
     sp._inward(mass, 1 + 0 * n, n, w)
 
 
-@njit(**_KW)
+@njit(inline="always", **_KW)  # no library of its own (``kernel`` doc)
 def torques(chain, gravity, q, qd, qdd, side, sole, share):
     """Joint torques [N m], Table-I order, (n, 8): ``compliance._Dynamics.torque``.
 

@@ -351,16 +351,16 @@ def _kinematics(geometry, dh_a, d5, n, w):
         w[_FR + 6 * B + j], w[_FR + 7 * B + j], w[_FR + 8 * B + j] = 1.0, 0.0, 0.0
         w[_FR + 9 * B + j], w[_FR + 10 * B + j] = w[_XS + j], w[_YS + j]
         w[_FR + 11 * B + j] = lan
-    # one call per row, its index a literal, inlined (numba IR) so that every offset is
-    # a constant (see ``_outward``)
-    _frame(0, dh_a[0], 0.0, d5, n, w)
-    _frame(1, dh_a[1], 0.0, d5, n, w)
-    _frame(2, dh_a[2], -k, d5, n, w)
-    _frame(3, dh_a[3], k, d5, n, w)
-    _frame(4, dh_a[4], 0.0, d5, n, w)
-    _frame(5, dh_a[5], k, d5, n, w)
-    _frame(6, dh_a[6], -k, d5, n, w)
-    _frame(7, dh_a[7], 0.0, d5, n, w)
+    # one call per row, its index and twist literals, inlined (numba IR) so that every
+    # offset is a constant (see ``_outward``)
+    _frame(0, 1.0, 0.0, dh_a[0], 0.0, d5, n, w)
+    _frame(1, 0.0, -1.0, dh_a[1], 0.0, d5, n, w)
+    _frame(2, 1.0, 0.0, dh_a[2], -k, d5, n, w)
+    _frame(3, 1.0, 0.0, dh_a[3], k, d5, n, w)
+    _frame(4, 1.0, 0.0, dh_a[4], 0.0, d5, n, w)
+    _frame(5, 1.0, 0.0, dh_a[5], k, d5, n, w)
+    _frame(6, 1.0, 0.0, dh_a[6], -k, d5, n, w)
+    _frame(7, 0.0, 1.0, dh_a[7], 0.0, d5, n, w)
     f = _FR + 8 * FRAME
     for j in range(n):  # swing sole: ankle_height along x8
         w[_SW + j] = w[f + 9 * B + j] + w[f + j] * lan
@@ -369,8 +369,11 @@ def _kinematics(geometry, dh_a, d5, n, w):
 
 
 @njit(inline="always", **_KW)
-def _frame(i, a, b, d5, n, w):
+def _frame(i, ca, sa, a, b, d5, n, w):
     """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, b, d) RotZ(θ).
+
+    ca, sa: cos α, sin α of the row (``_ALPHA_COS``, ``_ALPHA_SIN``), literals at the
+    call: a tuple read at a literal index compiles an overload per index (~50 ms each).
 
     d is 0 but on row 4, where it is d5 of the sample's stance side; b is the knee
     offset's shift (``kinematics`` module doc), added only where it is not 0 (so a leg
@@ -378,7 +381,6 @@ def _frame(i, a, b, d5, n, w):
     """
     n = min(n, B)  # a bound on the trip count (module doc)
     f, g = _FR + i * FRAME, _FR + (i + 1) * FRAME  # frame i, frame i + 1
-    ca, sa = _ALPHA_COS[i], _ALPHA_SIN[i]
     d_left, d_right = (d5[0], d5[1]) if i == 4 else (0.0, 0.0)
     for j in range(n):
         d = d_right if w[_SIDE + j] > 0.5 else d_left
@@ -533,15 +535,15 @@ def _inward(mass, double, n, w):
         w[_M + j] = w[_M + B + j] = w[_M + 2 * B + j] = 0.0
     # one call per link, its index a literal (see ``_outward``); the swing split
     # vectorises as a loop
-    _backward(8, mass, n, w)
-    _backward(7, mass, n, w)
-    _backward(6, mass, n, w)
-    _backward(5, mass, n, w)
-    _backward(4, mass, n, w)
-    _backward(3, mass, n, w)
-    _backward(2, mass, n, w)
-    _backward(1, mass, n, w)
-    _backward(0, mass, n, w)
+    _backward(8, -1.0, mass, n, w)
+    _backward(7, -1.0, mass, n, w)
+    _backward(6, -1.0, mass, n, w)
+    _backward(5, -1.0, mass, n, w)
+    _backward(4, 1.0, mass, n, w)
+    _backward(3, 1.0, mass, n, w)
+    _backward(2, 1.0, mass, n, w)
+    _backward(1, -1.0, mass, n, w)
+    _backward(0, 1.0, mass, n, w)
     for j in range(n):
         fx, fy, fz = w[_F + j], w[_F + B + j], w[_F + 2 * B + j]
         # moment about the stance sole point (x0 points up, so the sole is o0 − Lan z_S)
@@ -572,10 +574,12 @@ def _inward(mass, double, n, w):
 
 
 @njit(inline="always", **_KW)
-def _backward(i, mass, n, w):
-    """Link i of the inward recursion: force and moment at origin i, m · u_i."""
+def _backward(i, sign, mass, n, w):
+    """Link i of the inward recursion: force and moment at origin i, m · u_i.
+
+    sign: ``_AXIS_SIGN[i]``, a literal at the call (``_frame``'s α)."""
     n = min(n, B)  # a bound on the trip count (module doc)
-    m_i, sign = mass[i], _AXIS_SIGN[i]
+    m_i = mass[i]
     f, lk = _FR + i * FRAME, _LK + i * LINK
     # where the child's force acts: the next origin, or the swing sole for the last link
     nxt = _SW if i == N_LINK - 1 else _FR + (i + 1) * FRAME + 9 * B
@@ -731,7 +735,7 @@ def evaluate_block(
     evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, w)
 
 
-@njit(**_KW)
+@njit(inline="always", **_KW)  # no library of its own (``kernel`` doc)
 def evaluate_loaded(n, double, y, geometry, dh_a, d5, mass, com, inertia, gravity, x, w):
     """The pipeline at the n ≤ ``BLOCK`` samples whose inputs the scratch holds.
 

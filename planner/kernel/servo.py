@@ -179,7 +179,7 @@ def _system(m, c, kk, force, d, v, h):
     return matrix, rhs
 
 
-@njit(**_KW)
+@njit(inline="always", **_KW)  # no library of its own (``kernel`` doc)
 def _step(m, c, kk, force, d, v, h, jac, held):
     """``servo_loop._backward_euler``: (v', δ', a) of one step, and whether every system
     solved was regular; ``held``: the sole held."""
@@ -206,7 +206,7 @@ _NORMAL = 1  # servo_loop.NORMAL: the normal force's row in λ (HELD = x, z, rol
 _TANGENT = 0  # servo_loop.TANGENT: the force along the plane
 
 
-@njit(**_KW)
+@njit(inline="always", **_KW)  # no library of its own (``kernel`` doc)
 def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """``servo_loop._trailing``: the step with the lifting sole kept on the plane,
     J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0) or hold it
@@ -226,7 +226,7 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     normal = wrench[_NORMAL]
     held = normal > 0.0 and abs(wrench[_TANGENT]) <= friction * normal
     if not held:
-        # held, False here: a literal False would compile a second ``_step`` (~3 s)
+        # held, False here: the bool variable, as at ``integrate``'s call of ``_step``
         vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, held)
         return vn, dn, a, ok, False
     vn, dn = np.empty(dof), np.empty(dof)
