@@ -2,7 +2,6 @@
 
 import os
 import signal
-import subprocess
 import sys
 from dataclasses import replace
 
@@ -98,19 +97,23 @@ def test_a_second_run_resumes_to_the_same_bytes(tiny, capsys):
     assert (out / "envelope.csv").read_bytes() == before
 
 
-def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path):
+def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path, capsys):
     config, reference = tiny
     out = tmp_path / "out"
-    command = [*ENVELOPE_CMD, str(config), "--out", str(out), "--workers", "2"]
+    args = ["envelope", str(config), "--out", str(out), "--workers", "2"]
+    command = [*ENVELOPE_CMD, *args[1:]]
     with _started(command, tmp_path) as (proc, err):
         _wait_rows(out / "envelope.partial.csv", 1, proc, timeout=120)
         os.kill(proc.pid, signal.SIGKILL)  # the main process only: its workers must follow it
         assert proc.wait(timeout=30) == -signal.SIGKILL
         kept = _rows_in(out / "envelope.partial.csv")
-        resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True)
+        # resumed in this process (the killed run was a process of its own): no second
+        # interpreter to start, the same command line
+        code = main([*args, "--resume"])
         assert _gone(proc.pid) == [], "workers outlived their envelope"
-    assert resumed.returncode == 0, resumed.stderr
-    assert f"4 cells, {kept} already done, {4 - kept} to run" in resumed.stderr
+    resumed = capsys.readouterr().err
+    assert code == 0, resumed
+    assert f"4 cells, {kept} already done, {4 - kept} to run" in resumed
     assert not (out / "envelope.partial.csv").exists()
     assert (out / "envelope.csv").read_bytes() == (reference / "envelope.csv").read_bytes()
 
@@ -120,12 +123,14 @@ def test_an_unfinished_run_is_resumed_or_refused(tiny, tmp_path, capsys):
     out = tmp_path / "out"
     out.mkdir()
     lines = (reference / "envelope.csv").read_bytes().splitlines(keepends=True)
-    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
+    # three of the four cells done, as a killed run leaves them: each resume plays one cell
+    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:4]))
     assert main(["envelope", str(config), "--out", str(out), "--resume"]) == 0
-    assert "4 cells, 1 already done, 3 to run" in capsys.readouterr().err
-    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
+    assert "4 cells, 3 already done, 1 to run" in capsys.readouterr().err
+    assert (out / "envelope.csv").read_bytes() == (reference / "envelope.csv").read_bytes()
+    (out / "envelope.partial.csv").write_bytes(b"".join(lines[:4]))
     assert main(["envelope", str(config), "--out", str(out)]) == 0  # --out: resumes it
-    assert "4 cells, 1 already done, 3 to run" in capsys.readouterr().err
+    assert "4 cells, 3 already done, 1 to run" in capsys.readouterr().err
     (out / "envelope.partial.csv").write_bytes(b"".join(lines[:2]))
     cwd = os.getcwd()
     os.chdir(tmp_path)  # the default --out is ./results/envelope
