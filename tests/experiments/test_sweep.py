@@ -242,18 +242,19 @@ def test_an_unfinished_run_is_resumed_only_when_asked(tmp_path, monkeypatch, cap
 
 
 @pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGTERM])
-def test_a_killed_sweep_leaves_no_worker_and_resumes_at_once(tmp_path, reference, how):
+def test_a_killed_sweep_leaves_no_worker_and_resumes_at_once(tmp_path, capsys, reference, how):
     out = tmp_path / "out"
-    command = [*SWEEP, str(SMOKE), "--workers", "2", "--out", str(out)]
-    with _started(command, tmp_path) as (proc, err):
+    args = ["sweep", str(SMOKE), "--workers", "2", "--out", str(out)]
+    with _started([*SWEEP, *args[1:]], tmp_path) as (proc, err):
         _wait_rows(out / "sweep.partial.csv", 1, proc)
         assert len(_workers(proc.pid)) == 2
         os.kill(proc.pid, how)  # the main process only: its workers must follow it
         code = proc.wait(timeout=30)
-        resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True)
+        resumed = main([*args, "--resume"])  # in this process: no second interpreter to start
         assert _gone(proc.pid) == [], "workers outlived their sweep"
-    assert resumed.returncode == 0, resumed.stderr  # not refused: no one holds the lock
-    assert " already done, " in resumed.stderr and not (out / "sweep.partial.csv").exists()
+    said = capsys.readouterr().err
+    assert resumed == 0, said  # not refused: no one holds the lock
+    assert " already done, " in said and not (out / "sweep.partial.csv").exists()
     assert (out / "sweep.csv").read_bytes() == reference[1]
     if how == signal.SIGTERM:  # handled like Ctrl-C: one line, a non-zero exit
         assert code == 128 + signal.SIGTERM
@@ -264,12 +265,12 @@ def test_a_killed_sweep_leaves_no_worker_and_resumes_at_once(tmp_path, reference
         assert code == -signal.SIGKILL
 
 
-def test_a_killed_worker_costs_only_its_trial(tmp_path):
+def test_a_killed_worker_costs_only_its_trial(tmp_path, capsys):
     config = tmp_path / "s.toml"
     config.write_text("steps = 2\n[grid]\nstep_time = [2.0]\nslope = [0, 5, 10, 15, 20]\n")
     out = tmp_path / "out"
-    command = [*SWEEP, str(config), "--workers", "2", "--out", str(out)]
-    with _started(command, tmp_path) as (proc, err):
+    args = ["sweep", str(config), "--workers", "2", "--out", str(out)]
+    with _started([*SWEEP, *args[1:]], tmp_path) as (proc, err):
         _wait_rows(out / "sweep.partial.csv", 2, proc)  # both workers are up
         os.kill(_busy_worker(proc.pid), signal.SIGKILL)
         assert proc.wait(timeout=120) == 0, err.read_text()
@@ -281,8 +282,8 @@ def test_a_killed_worker_costs_only_its_trial(tmp_path):
     summary = err.read_text()  # stdout and stderr
     assert "5 trials: 5 run, 0 already done, 1 errors, 0 lost" in summary
     assert "analytic / simulated / walk verdicts: error/error/error 1, " in summary
-    resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True)
-    assert resumed.returncode == 0 and "5 already done, 0 to run" in resumed.stderr
+    assert main([*args, "--resume"]) == 0  # in this process: no second interpreter to start
+    assert "5 already done, 0 to run" in capsys.readouterr().err
 
 
 def test_a_million_trial_grid_says_its_size_at_once_and_stops_on_ctrl_c(tmp_path):
