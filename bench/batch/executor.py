@@ -226,7 +226,8 @@ def stop_server() -> None:
     if START_METHOD == "forkserver":
         from multiprocessing import forkserver
 
-        forkserver._forkserver._stop()  # the one way there is (CPython's own tests use it)
+        # the one way there is (CPython's own tests use it; typeshed does not list it)
+        forkserver._forkserver._stop()  # type: ignore[attr-defined]
 
 
 # --- the worker side ------------------------------------------------------------------------------
