@@ -166,6 +166,7 @@ def test_a_cell_that_raises_is_an_error_row(tmp_path):
     assert ENVELOPE.parse(ENVELOPE.header + ENVELOPE.format_row(row), tmp_path)[0]
 
 
+@pytest.mark.slow  # a convergence run: the tiny envelope's cells searched again; .ci/run runs it
 def test_convergence_reports_its_figures(tiny, capsys):
     config, out = tiny
     assert main(["envelope", str(config), "--out", str(out), "--convergence"]) == 0

@@ -17,6 +17,10 @@ import pytest
 
 from slopewalk.planner.spec import default_spec_path
 
+# a two-robot sweep with its report (the claims' replays of both robots, their figures):
+# 10-20 s with the VM's speed, a sweep of its own; .ci/run runs it on its own
+pytestmark = pytest.mark.slow
+
 SWEEP = (
     'steps = 1\n[grid]\nrobot = ["big.toml", "default"]\nstep_time = [1.0, 0.5]\nslope = [0, 10]\n'
 )

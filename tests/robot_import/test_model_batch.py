@@ -176,6 +176,7 @@ def test_load_sweep_takes_the_flag(tmp_path):
     assert load_sweep(path, model=ModelFile.of(WALKER)).trials[0].robot == "imported"
 
 
+@pytest.mark.slow  # an envelope on the imported model, GA and trials; .ci/run runs it
 def test_envelope_on_a_model_through_the_cli_marks_its_table_and_documents(tmp_path, capsys):
     config = tmp_path / "walker-env.toml"
     config.write_text(
