@@ -1,5 +1,6 @@
 import ctypes.util
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -63,3 +64,12 @@ def session_pids(sid: int) -> list[int]:
         if int(fields[3]) == sid and fields[0] != "Z":
             out.append(int(name))
     return out
+
+
+def left_in_session(sid: int, within: float = 5.0) -> list[int]:
+    """The processes of session ``sid`` still alive after ``within`` seconds (none, we hope):
+    what a killed run left behind once its children had time to follow it."""
+    deadline = time.monotonic() + within
+    while (left := session_pids(sid)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return left

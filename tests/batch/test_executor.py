@@ -11,7 +11,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
-from conftest import session_pids
+from conftest import left_in_session, session_pids
 
 from slopewalk.bench.batch.executor import (
     START_METHOD,
@@ -151,10 +151,7 @@ def test_the_fork_server_dies_with_its_killed_caller_even_while_importing(tmp_pa
         assert len(session_pids(proc.pid)) == 3
         proc.kill()
         proc.wait()
-        deadline = time.monotonic() + 3
-        while session_pids(proc.pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert session_pids(proc.pid) == [], "the fork server outlived its caller"
+        assert left_in_session(proc.pid, within=3) == [], "the fork server outlived its caller"
     finally:
         for pid in session_pids(proc.pid):
             os.kill(pid, signal.SIGKILL)
@@ -242,10 +239,7 @@ def test_busy_workers_die_with_their_killed_parent(tmp_path):
         time.sleep(1.0)  # the workers are asleep in their 60 s jobs
         proc.kill()
         proc.wait()
-        deadline = time.monotonic() + 3
-        while session_pids(proc.pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert session_pids(proc.pid) == [], "workers outlived their parent"
+        assert left_in_session(proc.pid, within=3) == [], "workers outlived their parent"
     finally:
         for pid in session_pids(proc.pid):
             os.kill(pid, signal.SIGKILL)

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from conftest import left_in_session
 
 from slopewalk.bench.cli import main
 from slopewalk.bench.experiments.envelope.cell import run_cell
@@ -16,7 +17,7 @@ from slopewalk.bench.sim.model import ACTUATOR_MODES
 from slopewalk.bench.sim.walk_check import WALK_VERDICTS
 from slopewalk.bench.tables.envelope import ENVELOPE
 from slopewalk.bench.tables.table import read_table
-from tests.experiments.test_sweep import _gone, _rows_in, _started, _wait_rows
+from tests.experiments.test_sweep import _rows_in, _started, _wait_rows
 
 TINY = """\
 steps = 2
@@ -110,7 +111,7 @@ def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path, capsys):
         # resumed in this process (the killed run was a process of its own): no second
         # interpreter to start, the same command line
         code = main([*args, "--resume"])
-        assert _gone(proc.pid) == [], "workers outlived their envelope"
+        assert left_in_session(proc.pid) == [], "workers outlived their envelope"
     resumed = capsys.readouterr().err
     assert code == 0, resumed
     assert f"4 cells, {kept} already done, {4 - kept} to run" in resumed

@@ -13,7 +13,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import pytest
-from conftest import session_pids
+from conftest import left_in_session
 
 from slopewalk.bench.cli import main
 from slopewalk.bench.experiments.sweep.config import (
@@ -50,14 +50,6 @@ def _rows_in(path: Path) -> int:
         return max(0, path.read_bytes().count(b"\n") - 1)
     except FileNotFoundError:
         return 0
-
-
-def _gone(sid: int, within: float = 5.0) -> list[int]:
-    """The processes of session ``sid`` still alive after ``within`` seconds (none, we hope)."""
-    deadline = time.monotonic() + within
-    while (left := session_pids(sid)) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    return left
 
 
 def _children(pid: int) -> list[tuple[int, bytes]]:
@@ -251,7 +243,7 @@ def test_a_killed_sweep_leaves_no_worker_and_resumes_at_once(tmp_path, capsys, r
         os.kill(proc.pid, how)  # the main process only: its workers must follow it
         code = proc.wait(timeout=30)
         resumed = main([*args, "--resume"])  # in this process: no second interpreter to start
-        assert _gone(proc.pid) == [], "workers outlived their sweep"
+        assert left_in_session(proc.pid) == [], "workers outlived their sweep"
     said = capsys.readouterr().err
     assert resumed == 0, said  # not refused: no one holds the lock
     assert " already done, " in said and not (out / "sweep.partial.csv").exists()
@@ -301,7 +293,7 @@ def test_a_million_trial_grid_says_its_size_at_once_and_stops_on_ctrl_c(tmp_path
         first = err.read_text().splitlines()[0]
         proc.send_signal(signal.SIGINT)
         code = proc.wait(timeout=30)  # a hang guard, not a speed goal
-        assert _gone(proc.pid) == []
+        assert left_in_session(proc.pid) == []
     assert first.startswith("sweep: 1000000 trials, 0 already done, 1000000 to run on 1 workers")
     assert " h at " in first  # the estimated time, before any trial
     assert code == 130 and "slopewalk: stopped by SIGINT" in err.read_text().splitlines()[-1]
