@@ -130,9 +130,6 @@ SCRATCH = _EXT + 12 * B
 
 _KW = {"cache": True, "error_model": "numpy", "nogil": True}
 
-# Table I's twists (RotX(α) of row i: α = −π/2 on row 2, +π/2 on row 8) as cos/sin.
-_ALPHA_COS = (1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0)
-_ALPHA_SIN = (0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 # Joint axis sign of link i (θ_i = sign q_i + offset): −1 on 1 and 5..8.
 _AXIS_SIGN = (1.0, -1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0)
 
@@ -352,7 +349,8 @@ def _kinematics(geometry, dh_a, d5, n, w):
         w[_FR + 9 * B + j], w[_FR + 10 * B + j] = w[_XS + j], w[_YS + j]
         w[_FR + 11 * B + j] = lan
     # one call per row, its index and twist literals, inlined (numba IR) so that every
-    # offset is a constant (see ``_outward``)
+    # offset is a constant (see ``_outward``); Table I's twists RotX(α) as cos α, sin α:
+    # α = −π/2 on row 2 (index 1), +π/2 on row 8 (index 7), 0 elsewhere
     _frame(0, 1.0, 0.0, dh_a[0], 0.0, d5, n, w)
     _frame(1, 0.0, -1.0, dh_a[1], 0.0, d5, n, w)
     _frame(2, 1.0, 0.0, dh_a[2], -k, d5, n, w)
@@ -372,8 +370,8 @@ def _kinematics(geometry, dh_a, d5, n, w):
 def _frame(i, ca, sa, a, b, d5, n, w):
     """Frame i + 1 from frame i by row i of Table I: RotX(α) Trans(a, b, d) RotZ(θ).
 
-    ca, sa: cos α, sin α of the row (``_ALPHA_COS``, ``_ALPHA_SIN``), literals at the
-    call: a tuple read at a literal index compiles an overload per index (~50 ms each).
+    ca, sa: cos α, sin α of the row (Table I's twist), literals at the call: a tuple
+    read at a literal index compiles an overload per index (~50 ms each).
 
     d is 0 but on row 4, where it is d5 of the sample's stance side; b is the knee
     offset's shift (``kinematics`` module doc), added only where it is not 0 (so a leg
