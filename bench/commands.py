@@ -448,8 +448,9 @@ def compare(args: argparse.Namespace) -> None:
 
 # a local batch's workers are forked from a server that imports these once (the job's
 # module, a trial's kernel entries); started first, it imports beside this process
-_SWEEP_SERVER = ("slopewalk.bench.experiments.sweep.run", "slopewalk.planner.kernel.preload")
-_ENVELOPE_SERVER = ("slopewalk.bench.experiments.envelope.run", "slopewalk.planner.kernel.preload")
+_KERNEL_PRELOAD = "slopewalk.planner.kernel.preload"
+_SWEEP_SERVER = ("slopewalk.bench.experiments.sweep.run", _KERNEL_PRELOAD)
+_ENVELOPE_SERVER = ("slopewalk.bench.experiments.envelope.run", _KERNEL_PRELOAD)
 
 
 def _start_workers_server(args: argparse.Namespace, modules: tuple[str, ...]) -> None:
