@@ -429,6 +429,7 @@ def sweep_figures() -> dict:
         return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
     from slopewalk.bench.experiments.sweep.run import first_estimate_s
+    from slopewalk.planner import pace
 
     estimate = first_estimate_s(config.trials.simulated_steps(), workers)
     before = capacity()
@@ -455,6 +456,7 @@ def sweep_figures() -> dict:
         "cpu_s": cpu,
         "raw_steps_per_cpu_s": raw_cpu,
         "cpu_fraction_of_raw": summary.sim_steps / cpu / raw_cpu,
+        "slowdown": pace.slowdown(),
         "first_estimate_s": estimate,
         "wall_over_estimate": wall / estimate,
         "cpu_over_estimate": cpu / workers / estimate,

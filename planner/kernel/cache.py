@@ -15,13 +15,14 @@ a trial's predictors); numba compiles a function at its first call, so a command
 compiles only the entries it calls. The drivers call ``first_use`` before an entry's
 call, which prints one line to stderr when its code is not cached
 (``slopewalk: compiling the kernel (once, about N s)``, N the sum of the compile
-times, measured on the 2-core machine (docs/benchmark.md), of the cold entries the
-command expects, ``expect``), and ``compiled`` after it. The mark is a
-file in the cache folder named by the entry's modules' keys, so an edit or an
-emptied cache makes the line come back. Where two or more of the command's entries are
-cold, ``first_use`` has them compiled side by side first, one process each
-(``prepare``: about the longest's time, not the sum), and the line says that; a
-sweep or an envelope does the same before its workers start (``Batch.kernel``).
+times, measured on the 2-core machine (docs/benchmark.md) and scaled by this machine's
+pace now (``planner/pace.py``), of the cold entries the command expects, ``expect``),
+and ``compiled`` after it. The mark is a file in the cache folder named by the entry's
+modules' keys, so an edit or an emptied cache makes the line come back. Where two or
+more of the command's entries are cold, ``first_use`` has them compiled side by side
+first, one process each (``prepare``: about the longest's time, not the sum), and the
+line says that; a sweep or an envelope does the same before its workers start
+(``Batch.kernel``).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from pathlib import Path
 
 from numba.core import caching, config
 
+from slopewalk.planner import pace
 from slopewalk.planner.kernel.location import default_dir
 
 KERNEL = Path(__file__).parent
@@ -136,13 +138,17 @@ _EXPECTED: list[tuple[str, ...]] = [()]  # what the running command will compile
 NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
 
 
-def cold_seconds(*names: str, slots: int = 1) -> float:
+def cold_seconds(*names: str, slots: int = 1, slowdown: float | None = None) -> float:
     """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
     over ``slots`` processes compiling them side by side (``prepare``: the entries share
     ``sample``'s stages, which one process compiles for both, so each of two processes
-    takes about half the sum)."""
+    takes about half the sum), times ``slowdown`` (this machine's pace against the one the
+    entries' seconds were measured on; None: ``pace.slowdown()``, measured)."""
     cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
-    return sum(cold) / max(1, min(slots, len(cold)))
+    if not cold:
+        return 0.0
+    slowdown = pace.slowdown() if slowdown is None else slowdown
+    return sum(cold) / max(1, min(slots, len(cold))) * slowdown
 
 
 def expect(*names: str) -> None:

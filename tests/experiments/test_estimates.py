@@ -1,26 +1,56 @@
 """The first estimates of a sweep's and an envelope's time count the analytic work per trial
 (the plan and the predictors), the workers' start and a cold kernel's compiling, not only
-the simulator's steps (which made a sweep's "about 4 s" take 25 s and more)."""
+the simulator's steps (which made a sweep's "about 4 s" take 25 s and more), and follow
+this machine's pace (``planner/pace.py``): constants from a fast hour said "about 26 s" for
+a cold main job that took 54 s on a slow one."""
 
 import pytest
 
 from slopewalk.bench.experiments.envelope import run as envelope
 from slopewalk.bench.experiments.sweep import run as sweep
+from slopewalk.planner import pace
+from slopewalk.planner.kernel import cache
 
 
 def test_the_sweep_estimate_counts_the_analytic_work_per_step(monkeypatch):
     steps, workers = 259_440, 2  # the default sweep's trials
-    with_analytic = sweep.first_estimate_s(steps, workers, compile_s=0.0)
+    with_analytic = sweep.first_estimate_s(steps, workers, compile_s=0.0, slowdown=1.0)
     monkeypatch.setattr(sweep, "ANALYTIC_S_PER_STEP", 0.0)
-    rollout_only = sweep.first_estimate_s(steps, workers, compile_s=0.0)
+    rollout_only = sweep.first_estimate_s(steps, workers, compile_s=0.0, slowdown=1.0)
     assert with_analytic - rollout_only == pytest.approx(steps * 20e-6 / workers)
     assert rollout_only == pytest.approx(steps / sweep.ROLLOUT_RATE / workers + 2.5)
 
 
 def test_a_cold_kernel_adds_its_compile_time_to_both_estimates():
-    assert sweep.first_estimate_s(1000, 2, compile_s=30.0) == pytest.approx(
-        sweep.first_estimate_s(1000, 2, compile_s=0.0) + 30.0
+    assert sweep.first_estimate_s(1000, 2, compile_s=30.0, slowdown=1.0) == pytest.approx(
+        sweep.first_estimate_s(1000, 2, compile_s=0.0, slowdown=1.0) + 30.0
     )
-    assert envelope.first_estimate_s(192, 2, compile_s=70.0) == pytest.approx(
+    assert envelope.first_estimate_s(192, 2, compile_s=70.0, slowdown=1.0) == pytest.approx(
         192 * envelope.CELL_S / 2 + sweep.WORKER_START_S + 70.0
     )
+
+
+@pytest.mark.parametrize("factor", [0.5, 2.3])
+def test_every_term_of_both_estimates_follows_the_measured_pace(tmp_path, monkeypatch, factor):
+    """A machine ``factor`` times slower than the reference (as ``pace.slowdown`` measures
+    it) takes ``factor`` times as long for the trials, the workers' start and the compile."""
+    monkeypatch.setattr(cache, "_root", lambda: str(tmp_path))  # an empty cache: all cold
+    monkeypatch.setattr(pace, "slowdown", lambda: factor)
+    sweep_reference = sweep.first_estimate_s(259_440, 2, slowdown=1.0)
+    assert sweep.first_estimate_s(259_440, 2) == pytest.approx(factor * sweep_reference)
+    envelope_reference = envelope.first_estimate_s(192, 2, slowdown=1.0)
+    assert envelope.first_estimate_s(192, 2) == pytest.approx(factor * envelope_reference)
+    assert cache.cold_seconds("plan", "predictors", slots=2) == pytest.approx(
+        factor * (cache.ENTRIES["plan"].seconds + cache.ENTRIES["predictors"].seconds) / 2
+    )
+
+
+def test_the_pace_is_the_best_probe_over_the_reference_machines(monkeypatch):
+    ticks = iter([0.0, 0.030, 1.0, 1.012, 2.0, 2.020])  # three probes: 30, 12, 20 ms
+    assert pace.probe_s(10, 3, clock=lambda: next(ticks)) == pytest.approx(0.012)
+    monkeypatch.setattr(pace, "probe_s", lambda: 2 * pace.REFERENCE_S)
+    pace.slowdown.cache_clear()
+    try:
+        assert pace.slowdown() == pytest.approx(2.0)
+    finally:
+        pace.slowdown.cache_clear()

@@ -34,10 +34,11 @@ def test_one_cold_entry_is_left_to_its_first_use(tmp_path, monkeypatch):
     mark.touch()
     assert cache.prepare("plan", "predictors") == 0.0  # returns at once, nothing spawned
     alone = cache.ENTRIES["predictors"].seconds
-    assert cache.cold_seconds("plan", "predictors", slots=2) == alone
+    assert cache.cold_seconds("plan", "predictors", slots=2, slowdown=1.0) == alone
     mark.unlink()
-    both = cache.cold_seconds("plan", "predictors", slots=2)
+    both = cache.cold_seconds("plan", "predictors", slots=2, slowdown=1.0)
     assert both == (alone + cache.ENTRIES["plan"].seconds) / 2
+    assert cache.cold_seconds("plan", "predictors", slots=2, slowdown=2.5) == 2.5 * both
 
 
 class _Done:

@@ -35,6 +35,7 @@ from slopewalk.bench.experiments.envelope.config import EnvelopeConfig
 from slopewalk.bench.experiments.sweep.run import WORKER_START_S, on_model
 from slopewalk.bench.tables.envelope import envelope_format, is_failure
 from slopewalk.bench.tables.table import model_format
+from slopewalk.planner import pace
 
 RECORDINGS_DIR = "recordings"
 CELL_S = 1.3  # [s] per cell and worker, the first estimate: run_cell's CPU time, 8 cells of
@@ -183,16 +184,21 @@ def run_envelope(
     )
 
 
-def first_estimate_s(cells: int, workers: int, cell_s: float = CELL_S, *, compile_s=None):
+def first_estimate_s(
+    cells: int, workers: int, cell_s: float = CELL_S, *, compile_s=None, slowdown=None
+):
     """The time [s] ``cells`` cells take on ``workers`` workers: ``cell_s`` each (the GA
-    and the cell's trials, analytic work included), the workers' start and, where the
-    kernel's code is not cached, its compiling (``compile_s``; None: as
-    ``planner/kernel/cache.py`` says for the GA's and a trial's entries)."""
+    and the cell's trials, analytic work included) and the workers' start, both times
+    ``slowdown`` (this machine's pace against the reference machine's; None:
+    ``pace.slowdown()``, measured), and, where the kernel's code is not cached, its
+    compiling (``compile_s``; None: as ``planner/kernel/cache.py`` says for the GA's and a
+    trial's entries, at the same pace)."""
+    slowdown = pace.slowdown() if slowdown is None else slowdown
     if compile_s is None:
         from slopewalk.planner.kernel import cache
 
-        compile_s = cache.cold_seconds("scores", "plan", "predictors")
-    return cells * cell_s / max(workers, 1) + WORKER_START_S + compile_s
+        compile_s = cache.cold_seconds("scores", "plan", "predictors", slowdown=slowdown)
+    return (cells * cell_s / max(workers, 1) + WORKER_START_S) * slowdown + compile_s
 
 
 def _intro(name, total, done, workers, executor, cell_s) -> str:
@@ -201,8 +207,8 @@ def _intro(name, total, done, workers, executor, cell_s) -> str:
     per = workers if executor is None else 1
     return (
         f"{name}: {total} cells, {done} already done, {left} to run{where}: about "
-        f"{duration(first_estimate_s(left, per, cell_s))} at {cell_s:g} s per cell and "
-        "worker (refined as cells finish)"
+        f"{duration(first_estimate_s(left, per, cell_s))} at {cell_s * pace.slowdown():.2g} s "
+        "per cell and worker (refined as cells finish)"
     )
 
 

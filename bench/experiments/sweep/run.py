@@ -55,6 +55,7 @@ from slopewalk.bench.tables.sweep import (
     outcome_columns,
 )
 from slopewalk.bench.tables.table import model_format
+from slopewalk.planner import pace
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -74,21 +75,25 @@ def step_seconds() -> float:
     return 1.0 / ROLLOUT_RATE + ANALYTIC_S_PER_STEP
 
 
-def first_estimate_s(steps: float, workers: int, *, compile_s: float | None = None) -> float:
+def first_estimate_s(
+    steps: float, workers: int, *, compile_s: float | None = None, slowdown: float | None = None
+) -> float:
     """The time [s] ``steps`` simulated steps of trials take on ``workers`` workers.
 
     Each step costs ``step_seconds`` (the rollout and the plan's and predictors' work per
-    sample); the workers start once (``WORKER_START_S``) and, where the kernel's code is
-    not cached, compile it first (``compile_s``; None: as ``planner/kernel/cache.py``
-    says for a trial's entries).
+    sample); the workers start once (``WORKER_START_S``), both times ``slowdown`` (this
+    machine's pace against the reference machine's; None: ``pace.slowdown()``, measured),
+    and, where the kernel's code is not cached, compile it first (``compile_s``; None: as
+    ``planner/kernel/cache.py`` says for a trial's entries, at the same pace).
     """
+    slowdown = pace.slowdown() if slowdown is None else slowdown
     if compile_s is None:
         from slopewalk.planner.kernel import cache
 
         compile_s = cache.cold_seconds(
-            "plan", "predictors", slots=min(workers, os.cpu_count() or 1)
+            "plan", "predictors", slots=min(workers, os.cpu_count() or 1), slowdown=slowdown
         )
-    return steps * step_seconds() / max(workers, 1) + WORKER_START_S + compile_s
+    return (steps * step_seconds() / max(workers, 1) + WORKER_START_S) * slowdown + compile_s
 
 
 def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
@@ -247,7 +252,7 @@ def run_sweep(
 
     def intro(done: int, workers: int) -> str:
         steps_left[0] = config.trials.simulated_steps() * (total - done) / max(total, 1)
-        rate = 1.0 / step_seconds()
+        rate = 1.0 / (step_seconds() * pace.slowdown())
         if executor is None:
             where = f" on {workers} workers"
             estimate = f"about {duration(first_estimate_s(steps_left[0], workers))}"
