@@ -71,6 +71,7 @@ SERVER_PRELOAD = "slopewalk.bench.batch.server"  # the server dies with its call
 PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fallback)
 WAIT_S = 0.5  # [s] longest wait of the main loop before it looks again
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+CLEAN_EXIT_S = 2.0  # [s] how long a pool left normally waits for its idle workers to exit
 MAX_FAILED_STARTS = 3  # workers in a row that die before they are ready: the pool gives up
 
 
@@ -335,10 +336,26 @@ class LocalPool:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.close()
+        self.close(clean=exc[0] is None)
 
-    def close(self) -> None:
-        """Kill every worker now (they hold nothing that needs a clean exit)."""
+    def close(self, *, clean: bool = False) -> None:
+        """End every worker: killed now, or with ``clean`` (the pool left normally) told to
+        stop and given ``CLEAN_EXIT_S`` to exit first, so their exit handlers run.
+
+        A worker's exit handlers matter under the fork server: a lock made in it through
+        ``multiprocessing`` (numba makes one as it starts its threads: an envelope's GA) is
+        a named semaphore registered with the caller's resource tracker, and a killed
+        worker leaves it there, which the tracker reports at the caller's exit as "leaked
+        semaphore objects". Stopped or failed, the pool still kills at once.
+        """
+        if clean:
+            for worker in self._pool:
+                with contextlib.suppress(Exception):
+                    worker.conn.send(None)  # its loop ends and the process exits by itself
+            deadline = time.monotonic() + CLEAN_EXIT_S
+            for worker in self._pool:
+                with contextlib.suppress(Exception):
+                    worker.process.join(max(0.0, deadline - time.monotonic()))
         for worker in self._pool:
             worker.stop()
         self._pool = []
