@@ -172,8 +172,12 @@ SMALL_ENVELOPE = (
 )
 
 
-@pytest.mark.parametrize(
-    "command, config, rows", [("sweep", SMALL_SWEEP, 3), ("envelope", SMALL_ENVELOPE, 2)]
+@pytest.mark.parametrize(  # the envelope's case is the same batch code: .ci/run runs it
+    "command, config, rows",
+    [
+        ("sweep", SMALL_SWEEP, 3),
+        pytest.param("envelope", SMALL_ENVELOPE, 2, marks=pytest.mark.slow),
+    ],
 )
 def test_a_run_whose_output_pipe_closes_stops_with_141_and_resumes(
     command, config, rows, tmp_path, capsys

@@ -98,6 +98,7 @@ def test_a_second_run_resumes_to_the_same_bytes(tiny, capsys):
     assert (out / "envelope.csv").read_bytes() == before
 
 
+@pytest.mark.slow  # a killed run resumed (the sweep's kill test runs by default); .ci/run
 def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path, capsys):
     config, reference = tiny
     out = tmp_path / "out"
@@ -119,6 +120,7 @@ def test_a_killed_envelope_resumes_where_it_stopped(tiny, tmp_path, capsys):
     assert (out / "envelope.csv").read_bytes() == (reference / "envelope.csv").read_bytes()
 
 
+@pytest.mark.slow  # three envelope runs; .ci/run runs it
 def test_an_unfinished_run_is_resumed_or_refused(tiny, tmp_path, capsys):
     config, reference = tiny
     out = tmp_path / "out"
@@ -249,6 +251,7 @@ def test_rows_are_found_by_their_id_as_written(tmp_path):
     assert list(_by_id(path, ENVELOPE)) == ["123456789012"]  # not the number 123456789012.0
 
 
+@pytest.mark.slow  # an envelope with a controller and recordings; .ci/run runs it
 def test_a_controller_walks_every_played_gait_in_columns_and_recordings_of_its_own(tmp_path):
     """The plan as a controller (``slopewalk.bench.sim.env:open_loop``) walks as open loop does; the
     ankle controller walks the same gaits with its own CoP trace; each is recorded by name."""

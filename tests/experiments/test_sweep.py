@@ -233,7 +233,9 @@ def test_an_unfinished_run_is_resumed_only_when_asked(tmp_path, monkeypatch, cap
     assert (out / "sweep.csv").read_bytes() == data
 
 
-@pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize(  # SIGTERM's path is the same pool kill; .ci/run runs it
+    "how", [signal.SIGKILL, pytest.param(signal.SIGTERM, marks=pytest.mark.slow)]
+)
 def test_a_killed_sweep_leaves_no_worker_and_resumes_at_once(tmp_path, capsys, reference, how):
     out = tmp_path / "out"
     args = ["sweep", str(SMOKE), "--workers", "2", "--out", str(out)]

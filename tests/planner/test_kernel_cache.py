@@ -4,6 +4,7 @@ import shutil
 
 import pytest
 
+from slopewalk.planner import pace
 from slopewalk.planner.kernel import cache
 
 
@@ -53,10 +54,13 @@ def _lines(capsys):
     return [line for line in capsys.readouterr().err.splitlines() if line]
 
 
-def test_a_cold_command_says_once_what_it_compiles_and_a_warm_one_nothing(cold, capsys):
+def test_a_cold_command_says_once_what_it_compiles_and_a_warm_one_nothing(
+    cold, capsys, monkeypatch
+):
+    monkeypatch.setattr(pace, "slowdown", lambda: 1.7)  # a machine 1.7x the reference's time
     cache.expect("plan", "predictors")
     cache.first_use("plan")
-    seconds = cache.ENTRIES["plan"].seconds + cache.ENTRIES["predictors"].seconds
+    seconds = 1.7 * (cache.ENTRIES["plan"].seconds + cache.ENTRIES["predictors"].seconds)
     assert _lines(capsys) == [f"slopewalk: compiling the kernel (once, about {seconds:.0f} s)"]
     cache.compiled("plan")
     cache.first_use("plan")
