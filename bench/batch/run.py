@@ -158,20 +158,11 @@ def run_batch(
         bar = Progress(total, done, tty=progress, quiet=quiet, name=batch.name)
         if intro is not None:
             bar.say(intro(done, workers))
-        if executor is None and done < total and batch.kernel:
-            from slopewalk.planner.kernel import cache
-
-            cache.prepare(*batch.kernel, workers=workers)
-        # a cluster sets its window from its workers' threads, never from this machine's cores
-        # a kernel batch's workers' server loads a trial's compiled entries once for them all
-        preload = ("slopewalk.planner.kernel.preload",) if batch.kernel else ()
-        pool = (
-            LocalPool(batch.fn, workers=workers, preload=preload)
-            if executor is None
-            else FuturesPool(batch.fn, executor)
-        )
-        try:
-            played = _play(pool, todo, table, batch, bar, record_dir, total - done, after_row)
+        try:  # a stop from here on (the compile, the workers' start) is the run's to report
+            played = _play(
+                _pool(batch, executor, workers, kernel=done < total),
+                todo, table, batch, bar, record_dir, total - done, after_row,
+            )  # fmt: skip
         except BaseException as err:
             bar.close()
             if table.created and not table.rows:  # nothing of ours to keep: leave no file
@@ -195,6 +186,21 @@ def run_batch(
         rows=tuple(played.rows),
         lost_workers=tuple(played.lost_workers),
     )
+
+
+def _pool(batch: Batch, executor: Executor | None, workers: int, *, kernel: bool):
+    """The batch's pool: local workers, where the kernel's cold entries are compiled first
+    (``kernel``: there are jobs to run), or the given executor."""
+    if executor is not None:
+        # a cluster sets its window from its workers' threads, never from this machine's cores
+        return FuturesPool(batch.fn, executor)
+    if kernel and batch.kernel:
+        from slopewalk.planner.kernel import cache
+
+        cache.prepare(*batch.kernel, workers=workers)
+    # a kernel batch's workers' server loads a trial's compiled entries once for them all
+    preload = ("slopewalk.planner.kernel.preload",) if batch.kernel else ()
+    return LocalPool(batch.fn, workers=workers, preload=preload)
 
 
 def _start_partial(

@@ -280,6 +280,31 @@ def test_a_killed_worker_costs_only_its_trial(tmp_path, capsys):
     assert "5 already done, 0 to run" in capsys.readouterr().err
 
 
+def test_a_stop_while_the_workers_start_is_the_runs_stop_and_leaves_nothing(tmp_path, monkeypatch):
+    """Ctrl-C after the first line but before the workers were up (a cold compile, the fork
+    server importing) escaped the run's own handling: "slopewalk: interrupted" and an empty
+    partial table that made the next run ask for --resume. Now it is the run's stop."""
+    from slopewalk.bench.batch import run as batch_run
+    from slopewalk.bench.batch.executor import Interrupted
+    from slopewalk.bench.batch.run import Stopped
+
+    def starting(*args, **kwargs):  # the signal, as it lands in the workers' start
+        raise Interrupted(signal.SIGINT)
+
+    monkeypatch.setattr(batch_run, "LocalPool", starting)
+    out = tmp_path / "out"
+    try:
+        run_sweep(load_sweep(SMOKE), out, workers=1, quiet=True)
+        pytest.fail("not stopped")
+    except Stopped as stop:
+        assert "stopped by SIGINT before any of the trials finished" in stop.message
+    except Interrupted:  # a KeyboardInterrupt would end pytest's session: fail this test alone
+        pytest.fail("the stop escaped the run's own handling")
+    assert list(out.iterdir()) == []
+    monkeypatch.undo()
+    assert run_sweep(load_sweep(SMOKE), out, workers=1, quiet=True).total == 4  # no --resume
+
+
 def test_a_million_trial_grid_says_its_size_at_once_and_stops_on_ctrl_c(tmp_path):
     values = ", ".join(f"{0.4 + x / 100:.2f}" for x in range(100))
     config = tmp_path / "big.toml"
