@@ -23,6 +23,7 @@ dragged sole stays loaded (``foot_slide``).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import TypedDict
@@ -104,6 +105,38 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         prediction=prediction,
         loop_walk=loop_walk,
     )
+
+
+class PredictionBeside:
+    """``predict_trial`` on a thread of its own, started at once: a trial's predictions are
+    worked out while MuJoCo plays the walk (``mujoco.rollout`` steps with the GIL released),
+    so a trial takes about the longer of the two, not their sum, where a second core is
+    free (``slopewalk trial``; in a sweep every worker already has one). The same calls on
+    the same inputs: the prediction is the one ``predict_trial`` returns in line. A daemon
+    thread, so a stopped command does not wait for it; ``result`` re-raises its error.
+    """
+
+    def __init__(self, plan: Plan, *, friction: float, actuators: str):
+        self._outcome: list = []  # [(True, prediction)] or [(False, error)], when done
+        self._thread = threading.Thread(
+            target=self._run, args=(plan, friction, actuators), daemon=True, name="prediction"
+        )
+        self._thread.start()
+
+    def _run(self, plan: Plan, friction: float, actuators: str) -> None:
+        try:
+            prediction = predict_trial(plan, friction=friction, actuators=actuators)
+            self._outcome.append((True, prediction))
+        except BaseException as err:  # handed to the caller's thread by ``result``
+            self._outcome.append((False, err))
+
+    def result(self) -> TrialPrediction:
+        """The prediction, once its thread is done (waits for it)."""
+        self._thread.join()
+        ok, value = self._outcome[0]
+        if not ok:
+            raise value
+        return value
 
 
 @lru_cache(maxsize=16)

@@ -44,7 +44,7 @@ from slopewalk.bench.actuators import actuator_mode
 from slopewalk.bench.sim.closed_loop import play_controller
 from slopewalk.bench.sim.events import Event, detect, loaded_tilt, verdict
 from slopewalk.bench.sim.playback import Recording, on_rows, play
-from slopewalk.bench.sim.prediction import predict_trial
+from slopewalk.bench.sim.prediction import PredictionBeside, TrialPrediction, predict_trial
 from slopewalk.bench.sim.support import support_difference
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.bench.sim.walk_check import measure as measure_walk
@@ -252,6 +252,11 @@ def run_trial(
     """
     start = time.perf_counter()
     plan = plan or plan_walk(spec, trial.gait)
+    beside = (  # worked out while the walk is played (``PredictionBeside``)
+        PredictionBeside(plan, friction=trial.friction, actuators=trial.actuators)
+        if predict and recording is None
+        else None
+    )
     if recording is None and trial.controller is not None:
         recording = play_controller(spec, trial, plan)
     recording = recording or play(
@@ -263,7 +268,9 @@ def run_trial(
         noise_seed=trial.noise_seed,
         scene=scene,
     )
-    return compare(plan, trial, recording, wall_s=time.perf_counter() - start, predict=predict)
+    wall_s = time.perf_counter() - start
+    prediction = None if beside is None else beside.result()
+    return compare(plan, trial, recording, wall_s=wall_s, predict=predict, prediction=prediction)
 
 
 def trial_checked(spec: RobotSpec, trial: TrialSpec, *, say=say_on_stderr) -> Plan:
@@ -295,12 +302,20 @@ NOT_PREDICTED = "not_predicted"  # the verdict columns of a trial compared with 
 
 
 def compare(
-    plan: Plan, trial: TrialSpec, recording: Recording, *, wall_s: float, predict: bool = True
+    plan: Plan,
+    trial: TrialSpec,
+    recording: Recording,
+    *,
+    wall_s: float,
+    predict: bool = True,
+    prediction: TrialPrediction | None = None,
 ) -> TrialResult:
     """Put prediction and simulation side by side (see module doc).
 
     With ``predict`` False the compliant and predicted verdicts read ``NOT_PREDICTED``,
     their margin and rotation NaN, and the series have no ``*_compliant`` entries.
+    ``prediction``: ``predict_trial``'s for this plan and trial, if already worked out
+    (``run_trial``: beside the simulation); None: worked out here.
     """
     weight = plan.spec.total_mass * GRAVITY
     events = detect(recording, weight=weight, hip_height=plan.params.hip_height)
@@ -320,9 +335,8 @@ def compare(
     idx = np.clip(np.searchsorted(plan.t, tw), 0, plan.t.size - 1)
     polygon = plan.polygon[idx]
     sim_margin = signed_margin(np.nan_to_num(cop), polygon)[standing]
-    predicted = (
-        predict_trial(plan, friction=trial.friction, actuators=trial.actuators) if predict else None
-    )
+    if prediction is None and predict:
+        prediction = predict_trial(plan, friction=trial.friction, actuators=trial.actuators)
     rows = walk & (t < min(lost, default=np.inf))
     down = [e.time for e in events if e.kind in ("fall", "diverged")]  # a tip's turn counts
     rocking = walk & (t < min(down, default=np.inf))
@@ -358,12 +372,12 @@ def compare(
         peak_torque_simulated=float(np.abs(s.actuator_force[walk]).max()),
         wall_s=wall_s,
         sim_steps=int(t.size),
-        **_predicted_columns(predicted),
+        **_predicted_columns(prediction),
         unplanned_contact_s=support.unplanned_contact_s,
         missed_contact_s=support.missed_contact_s,
         simulated_max_tilt=worst(loaded_tilt(recording, weight=weight)[rocking]),
-        **_walk_columns(plan, trial, recording, verdict(events), predicted),
-        series=_series(plan, s, walk, on_walk, predicted, tw, zmp, lipm, cop, q_plan, standing)
+        **_walk_columns(plan, trial, recording, verdict(events), prediction),
+        series=_series(plan, s, walk, on_walk, prediction, tw, zmp, lipm, cop, q_plan, standing)
         | _settling_series(s, t, t < plan.t[0])
         | _model_series(recording, walk, t < plan.t[0]),
     )

@@ -39,3 +39,57 @@ def test_a_trial_reports_all_three_verdicts_and_the_servo_falls_where_predicted(
     assert "saturation" in {e["kind"] for e in scalars["predicted_events"]}
     assert scalars["simulated_verdict"] != "stable"
     assert "zmp_compliant" in result.series and result.series["zmp_compliant"].shape[1] == 2
+
+
+def test_a_trials_prediction_worked_out_beside_the_rollout_is_the_one_in_line(spec, monkeypatch):
+    """``run_trial`` works the prediction out on a thread while MuJoCo plays the walk: it
+    starts before the rollout ends, and the trial's every column and series is what the
+    prediction worked out in line (``compare`` calling ``predict_trial``) gives."""
+    import threading
+
+    import numpy as np
+
+    from slopewalk.bench.sim import prediction as prediction_module
+    from slopewalk.bench.sim import trial as trial_module
+    from slopewalk.bench.sim.trial import compare
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=2))
+    trial = TrialSpec(plan.params, actuators="servo")
+    started, seen = threading.Event(), []
+    real_play, real_predict = trial_module.play, prediction_module.predict_trial
+
+    def predict_noting(*args, **kwargs):
+        started.set()
+        return real_predict(*args, **kwargs)
+
+    def play_waiting(*args, **kwargs):  # the rollout still running when the prediction starts
+        seen.append(started.wait(timeout=20))
+        return real_play(*args, **kwargs)
+
+    monkeypatch.setattr(prediction_module, "predict_trial", predict_noting)
+    monkeypatch.setattr(trial_module, "play", play_waiting)
+    beside = run_trial(spec, trial, plan=plan)
+    assert seen == [True]
+    monkeypatch.undo()
+    recording = trial_module.play(plan, friction=trial.friction, actuators=trial.actuators)
+    in_line = compare(plan, trial, recording, wall_s=0.0)
+    ours, theirs = beside.scalars(), in_line.scalars()
+    ours.pop("wall_s"), theirs.pop("wall_s")
+    assert ours == theirs and ours["predicted_verdict"] != "not_predicted"
+    assert beside.series.keys() == in_line.series.keys()
+    for key, value in beside.series.items():
+        np.testing.assert_array_equal(value, in_line.series[key], err_msg=key)
+
+
+def test_an_error_in_the_prediction_beside_the_rollout_reaches_the_caller(spec, monkeypatch):
+    import pytest
+
+    from slopewalk.bench.sim import prediction as prediction_module
+
+    def failing(*args, **kwargs):
+        raise FloatingPointError("the servo loop diverged")
+
+    monkeypatch.setattr(prediction_module, "predict_trial", failing)
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
+    with pytest.raises(FloatingPointError, match="the servo loop diverged"):
+        run_trial(spec, TrialSpec(plan.params), plan=plan)
