@@ -8,9 +8,9 @@ on, raw ``mj_step`` ran 70k steps/s at one hour and 30k at the next, and a cold
 2×. ``slowdown`` times a fixed piece of pure-Python work (``probe_s``, ~6 ms there at
 70k steps/s) and returns its ratio to ``REFERENCE_S``, by which the estimates scale.
 
-The probe tracks what the estimates count: over 45 samples on that VM, spread over its
-fast and slow moments, its rate correlates 0.88 with raw ``mj_step``'s (probe time ×
-steps/s stays within 350–580 s·steps/s while each moved 2×), and a cold compile
+The probe tracks what the estimates count: over 25 samples on that VM, spread over its
+fast and slow moments, its rate correlates 0.88 with raw ``mj_step``'s (the raw steps
+made in one probe's time stay within 290–580 while each rate moved 2×), and a cold compile
 (numba's front end is Python, LLVM branchy C++) slowed as the raw rate did (34.5 s at
 31k steps/s against 13.6 s at 70k). It is a proxy: the estimate it scales is asked to
 be within 2× of the wall time, not exact. Its cost is ~3 probes of ~6–15 ms, once per
