@@ -66,7 +66,12 @@ worse (0.9–1.0° against 0.7°). It predicts the tip one step early (1.25 s, M
 Not modelled: the joints' dry friction (``friction_loss``, 0.011 N m, < 1 % of the
 stall torque), a double-support sole lifting or sliding (the constraint is
 bilateral until lift-off), and the swing sole touching the plane again in single
-support (``strike``).
+support (``strike``). Known wrong (results/README.md, stop 33): the held sole is held
+where the loop's sag left it at the touchdown, not on the plane (J δ̇ = 0 only, not
+J δ = 0): on the nominal 2 s ``servo`` walk 3.6 mm above it, so every double support
+after the first has the lifting foot carry the whole weight (MuJoCo: 2.35 of 6.6 N);
+closing the chain at the touchdown fixes the split but costs `servo` verdicts on the
+design set, and is not in yet.
 """
 
 from __future__ import annotations
