@@ -446,19 +446,19 @@ def compare(args: argparse.Namespace) -> None:
         raise SystemExit(1)
 
 
-# a local batch's workers are forked from a server that imports these once (the job's
-# module, a trial's kernel entries); started first, it imports beside this process
-_KERNEL_PRELOAD = "slopewalk.planner.kernel.preload"
-_SWEEP_SERVER = ("slopewalk.bench.experiments.sweep.run", _KERNEL_PRELOAD)
-_ENVELOPE_SERVER = ("slopewalk.bench.experiments.envelope.run", _KERNEL_PRELOAD)
+# a local batch's workers are forked from a server that imports the job's module and a
+# trial's kernel entries (``executor.KERNEL_PRELOAD``) once; started first, it imports
+# beside this process
+_SWEEP_SERVER = "slopewalk.bench.experiments.sweep.run"
+_ENVELOPE_SERVER = "slopewalk.bench.experiments.envelope.run"
 
 
-def _start_workers_server(args: argparse.Namespace, modules: tuple[str, ...]) -> None:
+def _start_workers_server(args: argparse.Namespace, module: str) -> None:
     """Start the fork server of a local batch's workers now (``executor.start_server``)."""
     if args.cluster is None:
-        from slopewalk.bench.batch.executor import start_server
+        from slopewalk.bench.batch.executor import KERNEL_PRELOAD, start_server
 
-        start_server(modules)
+        start_server((module, KERNEL_PRELOAD))
 
 
 def sweep(args: argparse.Namespace) -> None:

@@ -68,6 +68,8 @@ from slopewalk.planner.errors import SlopewalkError
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 START_METHOD = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 SERVER_PRELOAD = "slopewalk.bench.batch.server"  # the server dies with its caller (module doc)
+# what a kernel batch's server imports after the job's module: a trial's cached kernel entries
+KERNEL_PRELOAD = "slopewalk.planner.kernel.preload"
 PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fallback)
 WAIT_S = 0.5  # [s] longest wait of the main loop before it looks again
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)

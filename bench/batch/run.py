@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import cast
 
 from slopewalk.bench.batch.executor import (
+    KERNEL_PRELOAD,
     FuturesPool,
     Interrupted,
     LocalPool,
@@ -160,7 +161,7 @@ def run_batch(
             bar.say(intro(done, workers))
         try:  # a stop from here on (the compile, the workers' start) is the run's to report
             played = _play(
-                _pool(batch, executor, workers, kernel=done < total),
+                _pool(batch, executor, workers, jobs_left=done < total),
                 todo, table, batch, bar, record_dir, total - done, after_row,
             )  # fmt: skip
         except BaseException as err:
@@ -188,18 +189,18 @@ def run_batch(
     )
 
 
-def _pool(batch: Batch, executor: Executor | None, workers: int, *, kernel: bool):
-    """The batch's pool: local workers, where the kernel's cold entries are compiled first
-    (``kernel``: there are jobs to run), or the given executor."""
+def _pool(batch: Batch, executor: Executor | None, workers: int, *, jobs_left: bool):
+    """The batch's pool: local workers, the kernel's cold entries compiled first where
+    there are ``jobs_left`` to run, or the given executor."""
     if executor is not None:
         # a cluster sets its window from its workers' threads, never from this machine's cores
         return FuturesPool(batch.fn, executor)
-    if kernel and batch.kernel:
+    if jobs_left and batch.kernel:
         from slopewalk.planner.kernel import cache
 
         cache.prepare(*batch.kernel, workers=workers)
     # a kernel batch's workers' server loads a trial's compiled entries once for them all
-    preload = ("slopewalk.planner.kernel.preload",) if batch.kernel else ()
+    preload = (KERNEL_PRELOAD,) if batch.kernel else ()
     return LocalPool(batch.fn, workers=workers, preload=preload)
 
 

@@ -24,6 +24,7 @@ dragged sole stays loaded (``foot_slide``).
 from __future__ import annotations
 
 import threading
+from concurrent.futures import Future
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import TypedDict
@@ -117,26 +118,20 @@ class PredictionBeside:
     """
 
     def __init__(self, plan: Plan, *, friction: float, actuators: str):
-        self._outcome: list = []  # [(True, prediction)] or [(False, error)], when done
-        self._thread = threading.Thread(
+        self._future: Future[TrialPrediction] = Future()
+        threading.Thread(
             target=self._run, args=(plan, friction, actuators), daemon=True, name="prediction"
-        )
-        self._thread.start()
+        ).start()
 
     def _run(self, plan: Plan, friction: float, actuators: str) -> None:
         try:
-            prediction = predict_trial(plan, friction=friction, actuators=actuators)
-            self._outcome.append((True, prediction))
+            self._future.set_result(predict_trial(plan, friction=friction, actuators=actuators))
         except BaseException as err:  # handed to the caller's thread by ``result``
-            self._outcome.append((False, err))
+            self._future.set_exception(err)
 
     def result(self) -> TrialPrediction:
         """The prediction, once its thread is done (waits for it)."""
-        self._thread.join()
-        ok, value = self._outcome[0]
-        if not ok:
-            raise value
-        return value
+        return self._future.result()
 
 
 @lru_cache(maxsize=16)
