@@ -472,6 +472,7 @@ def sweep(args: argparse.Namespace) -> None:
     config = load_sweep(args.config, model=model)  # the whole file is checked before anything runs
     _batch_on_model(args, config.model, SweepError)
     out, resume = _batch_start(args, Path.cwd() / "results", SweepError)
+    report = args.config is None or args.report  # the claims and figures after the trials
     with _batch_executor(args) as executor:
         summary = run_sweep(
             config,
@@ -481,11 +482,12 @@ def sweep(args: argparse.Namespace) -> None:
             resume=resume,
             record=args.record,
             progress=sys.stderr.isatty(),
+            report_robots=len(config.robots) if report else 0,
         )
     print("\n".join(summary.lines()))
     if summary.lost:
         raise SweepError(f"{len(summary.lost)} trials lost with their workers; add --resume")
-    if args.config is None or args.report:
+    if report:
         envelope = out / "envelope" / "envelope.csv"
         _write_claims(out, summary.table, envelope if envelope.exists() else None, config)
 

@@ -4,6 +4,8 @@ the simulator's steps (which made a sweep's "about 4 s" take 25 s and more), and
 this machine's pace (``planner/pace.py``): constants from a fast hour said "about 26 s" for
 a cold main job that took 54 s on a slow one."""
 
+from pathlib import Path
+
 import pytest
 
 from slopewalk.bench.experiments.envelope import run as envelope
@@ -30,14 +32,50 @@ def test_a_cold_kernel_adds_its_compile_time_to_both_estimates():
     )
 
 
+def test_a_report_after_the_trials_adds_its_time_per_robot():
+    """The default main job writes the claims and figures after its trials (~10 s at pace
+    2, which made the whole command take 2.05 times its first line's estimate)."""
+    bare = sweep.first_estimate_s(1000, 2, compile_s=0.0, slowdown=1.0)
+    assert sweep.first_estimate_s(
+        1000, 2, compile_s=0.0, slowdown=1.0, report_robots=2
+    ) == pytest.approx(bare + 2 * sweep.REPORT_S)
+
+
+def test_the_first_line_counts_the_report_the_command_writes(tmp_path, monkeypatch, capsys):
+    """``slopewalk sweep`` without CONFIG, or with ``--report``, writes a report on each
+    robot of the sweep after its trials, and its first line says so in its estimate; a
+    sweep without a report does not count one."""
+    from slopewalk.bench import commands
+    from slopewalk.bench.cli import main
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+
+    monkeypatch.setattr(pace, "slowdown", lambda: 1.0)
+    monkeypatch.setattr(sweep, "duration", lambda seconds: f"{seconds:.3f} s")
+    monkeypatch.setattr(commands, "_write_claims", lambda *args: None)
+    scaled = Path(load_sweep().source).parent / "robots" / "scaled.toml"
+    config = tmp_path / "two.toml"  # two robots, one cheap trial each
+    config.write_text(f'steps = 1\n[grid]\nrobot = ["default", "{scaled}"]\nstep_time = [0.3]\n')
+    said = {}
+    for flags in ([], ["--report"]):
+        out = tmp_path / f"out{len(flags)}"
+        assert main(["sweep", str(config), "--workers", "1", "--out", str(out), *flags]) == 0
+        first = next(line for line in capsys.readouterr().err.splitlines() if "about" in line)
+        said[bool(flags)] = float(first.split("about ")[1].split(" s")[0])
+    assert ("the report after the trials" in first) and said[True] == pytest.approx(
+        said[False] + 2 * sweep.REPORT_S, abs=2e-3
+    )
+
+
 @pytest.mark.parametrize("factor", [0.5, 2.3])
 def test_every_term_of_both_estimates_follows_the_measured_pace(tmp_path, monkeypatch, factor):
     """A machine ``factor`` times slower than the reference (as ``pace.slowdown`` measures
     it) takes ``factor`` times as long for the trials, the workers' start and the compile."""
     monkeypatch.setattr(cache, "_root", lambda: str(tmp_path))  # an empty cache: all cold
     monkeypatch.setattr(pace, "slowdown", lambda: factor)
-    sweep_reference = sweep.first_estimate_s(259_440, 2, slowdown=1.0)
-    assert sweep.first_estimate_s(259_440, 2) == pytest.approx(factor * sweep_reference)
+    sweep_reference = sweep.first_estimate_s(259_440, 2, slowdown=1.0, report_robots=1)
+    assert sweep.first_estimate_s(259_440, 2, report_robots=1) == pytest.approx(
+        factor * sweep_reference
+    )
     envelope_reference = envelope.first_estimate_s(192, 2, slowdown=1.0)
     assert envelope.first_estimate_s(192, 2) == pytest.approx(factor * envelope_reference)
     assert cache.cold_seconds("plan", "predictors", slots=2) == pytest.approx(

@@ -155,6 +155,12 @@ class SweepConfig:
         return any(value is not None for box in self.boxes for _, value in box.values[k])
 
     @property
+    def robots(self) -> tuple[str, ...]:
+        """The robots its trials play (their ``robot`` column), in file order."""
+        k = AXES.index("body")
+        return tuple(dict.fromkeys(body.robot for box in self.boxes for _, body in box.values[k]))
+
+    @property
     def closed_loop(self) -> bool:
         """Some trial names a controller (its table has a ``controller`` column)."""
         k = AXES.index("controller")

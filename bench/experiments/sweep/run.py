@@ -68,6 +68,10 @@ ANALYTIC_S_PER_STEP = 20e-6  # [s] per sim step: the rest of a trial - the plan,
 # predictors (servo loop, compliance, tipping), decoding and comparison - all of which
 # scale with the walk's samples (1 ms, as the sim's steps): 37 us a step in all
 WORKER_START_S = 2.5  # [s] the workers' imports and cached-kernel loading (their fork server's)
+# [s] per robot: the report a plain ``slopewalk sweep`` (or ``--report``) writes after the
+# trials (``commands._write_claims``: the claims' 13 replays, the GA's best gaits played,
+# matplotlib's import and 5 figures); measured 8.8 and 10.1 s at pace 1.6 and 1.9
+REPORT_S = 5.5
 
 
 def step_seconds() -> float:
@@ -76,15 +80,21 @@ def step_seconds() -> float:
 
 
 def first_estimate_s(
-    steps: float, workers: int, *, compile_s: float | None = None, slowdown: float | None = None
+    steps: float,
+    workers: int,
+    *,
+    compile_s: float | None = None,
+    slowdown: float | None = None,
+    report_robots: int = 0,
 ) -> float:
     """The time [s] ``steps`` simulated steps of trials take on ``workers`` workers.
 
     Each step costs ``step_seconds`` (the rollout and the plan's and predictors' work per
-    sample); the workers start once (``WORKER_START_S``), both times ``slowdown`` (this
-    machine's pace against the reference machine's; None: ``pace.slowdown()``, measured),
-    and, where the kernel's code is not cached, compile it first (``compile_s``; None: as
-    ``planner/kernel/cache.py`` says for a trial's entries, at the same pace).
+    sample); the workers start once (``WORKER_START_S``), and a report on
+    ``report_robots`` robots follows the trials (``REPORT_S`` each), all times ``slowdown``
+    (this machine's pace against the reference machine's; None: ``pace.slowdown()``,
+    measured), and, where the kernel's code is not cached, compile it first (``compile_s``;
+    None: as ``planner/kernel/cache.py`` says for a trial's entries, at the same pace).
     """
     slowdown = pace.slowdown() if slowdown is None else slowdown
     if compile_s is None:
@@ -93,7 +103,8 @@ def first_estimate_s(
         compile_s = cache.cold_seconds(
             "plan", "predictors", slots=min(workers, os.cpu_count() or 1), slowdown=slowdown
         )
-    return (steps * step_seconds() / max(workers, 1) + WORKER_START_S) * slowdown + compile_s
+    work = steps * step_seconds() / max(workers, 1) + WORKER_START_S + report_robots * REPORT_S
+    return work * slowdown + compile_s
 
 
 def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
@@ -222,6 +233,7 @@ def run_sweep(
     record: bool = False,
     progress: bool = False,
     quiet: bool = False,
+    report_robots: int = 0,
 ) -> SweepSummary:
     """Run the trials of ``config`` into ``out_dir`` (module doc), appending each row.
 
@@ -236,6 +248,9 @@ def run_sweep(
         record: Also write ``recordings/<trial_id>.rrd`` per trial.
         progress: A tqdm bar on stderr; else a log line at every tenth of the sweep.
         quiet: Neither bar nor log lines.
+        report_robots: The caller writes a report on this many robots after the trials
+            (``slopewalk sweep`` without CONFIG, or ``--report``): the first line's
+            estimate counts it (``REPORT_S``).
 
     Raises:
         SweepError: a table there is not a sweep table, holds trials not in
@@ -253,24 +268,31 @@ def run_sweep(
     def intro(done: int, workers: int) -> str:
         steps_left[0] = config.trials.simulated_steps() * (total - done) / max(total, 1)
         rate = 1.0 / (step_seconds() * pace.slowdown())
+        report = report_s()
         if executor is None:
             where = f" on {workers} workers"
-            estimate = f"about {duration(first_estimate_s(steps_left[0], workers))}"
+            first = first_estimate_s(steps_left[0], workers, report_robots=report_robots)
+            estimate = f"about {duration(first)}"
         else:
             where = ""
             estimate = f"about {duration(first_estimate_s(steps_left[0], 1))} of worker time"
+            estimate += f", then about {duration(report)} here" if report else ""
+        report_too = " and the report after the trials" if report else ""
         return (
             f"sweep: {total} trials, {done} already done, {total - done} to run{where}: "
-            f"{estimate} at {rate:.0f} sim steps/s per worker, the analytic work included "
-            "(refined as trials finish)"
+            f"{estimate} at {rate:.0f} sim steps/s per worker, the analytic work{report_too} "
+            "included (refined as trials finish)"
         )
+
+    def report_s() -> float:  # [s] the report after the trials, at this machine's pace
+        return report_robots * REPORT_S * pace.slowdown()
 
     def after_row(row: dict, left_trials: int) -> str:
         sim_steps[0] += row.get("sim_steps") or 0
         left, elapsed = steps_left[0] - sim_steps[0], time.perf_counter() - start
         if not sim_steps[0] or left <= 0:
             return ""
-        return f", about {duration(left / (sim_steps[0] / elapsed))} left"
+        return f", about {duration(left / (sim_steps[0] / elapsed) + report_s())} left"
 
     # a controller, command noise or other gaits add columns (tables/sweep.py), a model its own
     fmt = (
