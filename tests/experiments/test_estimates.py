@@ -92,3 +92,43 @@ def test_the_pace_is_the_best_probe_over_the_reference_machines(monkeypatch):
         assert pace.slowdown() == pytest.approx(2.0)
     finally:
         pace.slowdown.cache_clear()
+
+
+def test_the_time_left_runs_from_the_first_trial_not_from_the_compile(monkeypatch):
+    """The progress lines' "about N left" extrapolates the trials' own rate: counted from
+    the command's start, a cold compile made it say "about 3 min left" with 45 s to go."""
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+
+    said, clock = {}, [0.0]
+
+    def run_batch(*args, intro, after_row, **kwargs):
+        said["intro"], said["after_row"] = intro, after_row
+        raise _Caught
+
+    monkeypatch.setattr(sweep, "run_batch", run_batch)
+    monkeypatch.setattr(sweep.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(sweep, "duration", lambda seconds: f"{seconds:.1f} s")
+    config = load_sweep()
+    with pytest.raises(_Caught):
+        sweep.run_sweep(config, "unused", workers=2)
+    said["intro"](0, 2)  # the default sweep's steps to run
+    clock[0] = 40.0  # a 38 s compile and the workers' start, then the first trial ends
+    assert said["after_row"]({"sim_steps": 5_000}, 49) == ""
+    clock[0] = 41.0  # and the next, a second later: 5,000 steps/s from here on
+    left = (config.trials.simulated_steps() - 10_000) / 5_000
+    assert said["after_row"]({"sim_steps": 5_000}, 48) == f", about {left:.1f} s left"
+
+
+def test_the_envelope_time_left_runs_from_the_first_cell(monkeypatch):
+    """As the sweep's: an envelope's cold compile (the GA's entries too) is not a cell's."""
+    clock = [70.0]  # the compile and the workers' start, then the first cell ends
+    monkeypatch.setattr(envelope.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(envelope, "duration", lambda seconds: f"{seconds:.1f} s")
+    after_row = envelope._eta()
+    assert after_row({}, 9) == ""
+    clock[0] = 80.0  # the next, 10 s later
+    assert after_row({}, 8) == ", about 80.0 s left"
+
+
+class _Caught(Exception):
+    pass

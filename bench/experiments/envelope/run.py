@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from slopewalk.bench.batch.progress import RateSinceFirst
 from slopewalk.bench.batch.run import Batch, duration, run_batch
 from slopewalk.bench.experiments.envelope.cell import (
     error_row,
@@ -166,7 +167,7 @@ def run_envelope(
         quiet=quiet,
         order=lambda c: -c.step_time,  # longest walks first
         intro=lambda done, w: _intro("envelope", len(cells), done, w, executor, CELL_S),
-        after_row=_eta(start, len(cells)),
+        after_row=_eta(),
     )
     return EnvelopeSummary(
         table=result.table,
@@ -212,13 +213,12 @@ def _intro(name, total, done, workers, executor, cell_s) -> str:
     )
 
 
-def _eta(start: float, total: int):
-    count = [0]
+def _eta():
+    rate = RateSinceFirst()  # the cells' own rate: the compile and workers' start aside
 
     def after_row(row: dict, left: int) -> str:
-        count[0] += 1
-        rate = count[0] / (time.perf_counter() - start)
-        return f", about {duration(left / rate)} left"
+        cells_per_s = rate.add(1)
+        return "" if cells_per_s is None else f", about {duration(left / cells_per_s)} left"
 
     return after_row
 
@@ -290,7 +290,6 @@ def run_convergence(
     base, bigger = convergence_cells(config)
     threads = _threads(workers, executor)
     bigger = [replace(c, threads=threads) for c in bigger]
-    start = time.perf_counter()
     result = run_batch(
         _batch("convergence", run_cell_search, config),
         bigger,
@@ -305,7 +304,7 @@ def run_convergence(
         intro=lambda done, w: _intro(
             "convergence", len(bigger), done, w, executor, CELL_S * CONVERGENCE_FACTOR / 2
         ),
-        after_row=_eta(start, len(bigger)),
+        after_row=_eta(),
     )
     return compare_budgets(table, result.table, base, bigger)
 

@@ -45,6 +45,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from slopewalk.bench.batch.executor import one_line
+from slopewalk.bench.batch.progress import RateSinceFirst
 from slopewalk.bench.batch.run import Batch, Stopped, duration, run_batch
 from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepTrial
 from slopewalk.bench.tables.sweep import (
@@ -262,7 +263,6 @@ def run_sweep(
     record_dir = out_dir / RECORDINGS_DIR if record else None
     workers = workers or os.cpu_count() or 1
     total = len(config.trials)
-    sim_steps = [0]
     steps_left = [0.0]
 
     def intro(done: int, workers: int) -> str:
@@ -287,12 +287,14 @@ def run_sweep(
     def report_s() -> float:  # [s] the report after the trials, at this machine's pace
         return report_robots * REPORT_S * pace.slowdown()
 
+    rate = RateSinceFirst()  # the trials' own rate: the compile and workers' start aside
+
     def after_row(row: dict, left_trials: int) -> str:
-        sim_steps[0] += row.get("sim_steps") or 0
-        left, elapsed = steps_left[0] - sim_steps[0], time.perf_counter() - start
-        if not sim_steps[0] or left <= 0:
+        steps_per_s = rate.add(row.get("sim_steps") or 0)
+        left = steps_left[0] - rate.done
+        if steps_per_s is None or left <= 0:
             return ""
-        return f", about {duration(left / (sim_steps[0] / elapsed) + report_s())} left"
+        return f", about {duration(left / steps_per_s + report_s())} left"
 
     # a controller, command noise or other gaits add columns (tables/sweep.py), a model its own
     fmt = (
