@@ -265,27 +265,26 @@ def run_sweep(
     total = len(config.trials)
     steps_left = [0.0]
 
+    def report_s() -> float:  # [s] the report after the trials, at this machine's pace
+        return report_robots * REPORT_S * pace.slowdown()
+
     def intro(done: int, workers: int) -> str:
         steps_left[0] = config.trials.simulated_steps() * (total - done) / max(total, 1)
         rate = 1.0 / (step_seconds() * pace.slowdown())
-        report = report_s()
         if executor is None:
             where = f" on {workers} workers"
             first = first_estimate_s(steps_left[0], workers, report_robots=report_robots)
             estimate = f"about {duration(first)}"
-        else:
+        else:  # the cluster's workers play the trials; the report is written here
             where = ""
             estimate = f"about {duration(first_estimate_s(steps_left[0], 1))} of worker time"
-            estimate += f", then about {duration(report)} here" if report else ""
-        report_too = " and the report after the trials" if report else ""
+            estimate += f", then about {duration(report_s())} here" if report_robots else ""
+        report_too = " and the report after the trials" if report_robots else ""
         return (
             f"sweep: {total} trials, {done} already done, {total - done} to run{where}: "
             f"{estimate} at {rate:.0f} sim steps/s per worker, the analytic work{report_too} "
             "included (refined as trials finish)"
         )
-
-    def report_s() -> float:  # [s] the report after the trials, at this machine's pace
-        return report_robots * REPORT_S * pace.slowdown()
 
     rate = RateSinceFirst()  # the trials' own rate: the compile and workers' start aside
 
