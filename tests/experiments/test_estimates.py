@@ -119,6 +119,35 @@ def test_the_time_left_runs_from_the_first_trial_not_from_the_compile(monkeypatc
     assert said["after_row"]({"sim_steps": 5_000}, 48) == f", about {left:.1f} s left"
 
 
+@pytest.mark.parametrize("report_robots", [0, 1])
+def test_a_clusters_first_line_says_the_worker_time_then_the_report_here(
+    monkeypatch, report_robots
+):
+    """On a cluster (``--cluster``) its workers play the trials and this machine writes
+    the report: the first line says the trials' worker time (one worker's, the cluster's
+    size being its own), then the report's time here where there is one."""
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+
+    said = {}
+
+    def run_batch(*args, intro, after_row, **kwargs):
+        said["intro"] = intro
+        raise _Caught
+
+    monkeypatch.setattr(sweep, "run_batch", run_batch)
+    monkeypatch.setattr(pace, "slowdown", lambda: 1.0)
+    monkeypatch.setattr(sweep, "duration", lambda seconds: f"{seconds:.3f} s")
+    config = load_sweep()
+    with pytest.raises(_Caught):
+        sweep.run_sweep(config, "unused", executor=object(), report_robots=report_robots)
+    line = said["intro"](0, 2)
+    worker_s = sweep.first_estimate_s(config.trials.simulated_steps(), 1)
+    here = f", then about {report_robots * sweep.REPORT_S:.3f} s here" if report_robots else ""
+    assert f": about {worker_s:.3f} s of worker time{here} at " in line
+    assert "workers" not in line.split(":")[1]  # the cluster's, not this machine's
+    assert ("and the report after the trials" in line) == bool(report_robots)
+
+
 def test_the_envelope_time_left_runs_from_the_first_cell(monkeypatch):
     """As the sweep's: an envelope's cold compile (the GA's entries too) is not a cell's."""
     clock = [70.0]  # the compile and the workers' start, then the first cell ends
