@@ -71,7 +71,12 @@ where the loop's sag left it at the touchdown, not on the plane (J δ̇ = 0 only
 J δ = 0): on the nominal 2 s ``servo`` walk 3.6 mm above it, so every double support
 after the first has the lifting foot carry the whole weight (MuJoCo: 2.35 of 6.6 N);
 closing the chain at the touchdown fixes the split but costs `servo` verdicts on the
-design set, and is not in yet.
+design set, and is not in yet. Missing (results/README.md, stop 35): the robot moving as a
+whole on its soles. The stance sole is bolted to the plane and a landing is plastic, so
+the bounce a landing makes on the lightly damped servos is not in the walk: on fast
+(0.35-0.55 s) ``servo`` gaits MuJoCo's robot lands hard, falls back onto the old stance
+foot and tips (24 of 28 predicted-stable design-set trials), and walks with the joints'
+damping tripled; the loop takes that damping divided by 3 to call them.
 """
 
 from __future__ import annotations
