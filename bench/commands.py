@@ -625,6 +625,11 @@ def controllers(args: argparse.Namespace) -> None:
             f"{config.source}: command_noise = {config.command_noise_deg:g} deg: the "
             "controllers make their own commands; give a sweep file without command_noise"
         )
+    if config.spec_ends:
+        raise ControllerError(
+            f"{config.source}: spec_ends = {list(config.spec_ends)!r}: the controllers' table "
+            "has no spec_end column; give a sweep file without spec_ends"
+        )
     table = compare_controllers(config, names, workers=args.workers)
     source = args.config or in_package(DEFAULT_SWEEP)
     command = " ".join(

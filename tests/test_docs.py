@@ -68,7 +68,7 @@ def test_sweep_doc_has_every_key_with_the_codes_default(tmp_path):
 
 def test_sweep_doc_example_is_a_valid_sweep(tmp_path):
     """The example parses, robot path included, into the trials its comments promise."""
-    example, replicas, draw, envelope = re.findall(
+    example, replicas, ends, draw, envelope = re.findall(
         r"```toml\n(.*?)```", SWEEP_DOC.read_text(), re.S
     )
     (robot,) = re.findall(r'robot = "([^"]+)"', example)
@@ -79,6 +79,8 @@ def test_sweep_doc_example_is_a_valid_sweep(tmp_path):
     assert len(config.trials) == 12 + 2 + 2
     noisy = sweep_from_dict(tomllib.loads(replicas) | {"trial": [{}]}, base_dir=tmp_path)
     assert len(noisy.trials) == 8 and noisy.noisy  # the replicas snippet: 8 seeds
+    moved = sweep_from_dict(tomllib.loads(ends) | {"trial": [{}]}, base_dir=tmp_path)
+    assert [t.spec_end for t in moved.trials] == list(tomllib.loads(ends)["spec_ends"])
     drawn = sweep_from_dict(tomllib.loads(draw) | {"grid": {"step_time": [1.0]}}, base_dir=tmp_path)
     assert len(drawn.trials) == 2 and drawn.other_gaits  # a gait of each family
     assert tomllib.loads(envelope)["grid"] == {

@@ -11,7 +11,9 @@ verdict (``predicted_walk``) says what the simulated one (``walk``) says; each d
 the predicted verdict with the measured quantities that explain it; and the
 issue's goals where the table holds their cells (flat 2 s stiff CoP RMS,
 ``servo_ff`` on every cell with ≥ 5 mm planned margin within the joint limits); for
-a table of several seeds of command noise, the verdicts seed by seed (``replicas``).
+a table of several seeds of command noise, the verdicts seed by seed, and for trials
+replayed at the spec's estimated ends, where those ends decide the simulated verdict
+(``replicas``).
 """
 
 from __future__ import annotations
@@ -23,7 +25,15 @@ from pathlib import Path
 import numpy as np
 
 from slopewalk.bench.actuators import modes_where
-from slopewalk.bench.report.replicas import replica_section, trial_key, undecided
+from slopewalk.bench.report.replicas import (
+    NOMINAL,
+    replica_section,
+    spec_decides,
+    spec_end,
+    spec_end_section,
+    trial_key,
+    undecided,
+)
 from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.verdict import (
@@ -87,11 +97,16 @@ def fidelity_report(
                 f"{name}: no column {missing[0]} (a sweep table of an older version; re-run it)"
             )
     lines += summary_table(tables, held_out)
-    noisy = undecided(tables | held_out)
+    everything = tables | held_out
+    short = Counter(set_name(k) for k in everything)  # a set's name, its path where two share one
+    named = {(set_name(k) if short[set_name(k)] == 1 else k): v for k, v in everything.items()}
+    lines += spec_end_section(named, _share)
+    noisy = undecided(everything)
+    spec = spec_decides(everything)
     if held_out:
         lines += ["# Development: the grids the predictor was designed on", ""]
     for name, rows in tables.items():
-        lines += _table_section(name, rows, noisy)
+        lines += _table_section(name, rows, noisy, spec)
     if held_out:
         lines += [
             "# Held out: gaits and robots never used to design the predictor",
@@ -101,7 +116,7 @@ def fidelity_report(
             "",
         ]
     for name, rows in held_out.items():
-        lines += _table_section(name, rows, noisy)
+        lines += _table_section(name, rows, noisy, spec)
     return "\n".join(lines) + "\n"
 
 
@@ -205,9 +220,12 @@ def _walks(verdict) -> bool:
     return verdict == "stable"
 
 
-def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> list[str]:
-    """Markdown of one table; ``noisy``: ``replicas.undecided`` of the report's tables."""
-    noisy = noisy or {}
+def _table_section(
+    name: str, rows: list[dict], noisy: dict | None = None, spec: dict | None = None
+) -> list[str]:
+    """Markdown of one table; ``noisy``: ``replicas.undecided`` of the report's tables,
+    ``spec``: their ``replicas.spec_decides``."""
+    noisy, spec = noisy or {}, spec or {}
     all_rows = rows
     rows = [r for r in rows if r["simulated_verdict"] != "error"]
     n = len(rows)
@@ -235,6 +253,7 @@ def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> li
     if wrong:
         classes = Counter(cause_class(r) for r in wrong)
         on_noise = sum(trial_key(r) in noisy for r in wrong)
+        on_spec = sum(trial_key(r) in spec for r in wrong)
         lines += [
             "By measured cause: "
             + ", ".join(f"{k} {v}" for k, v in classes.most_common())
@@ -243,12 +262,19 @@ def _table_section(name: str, rows: list[dict], noisy: dict | None = None) -> li
                 "decides (MuJoCo does not decide them)"
                 if on_noise
                 else ""
+            )
+            + (
+                f"; {on_spec} of them on trials whose simulated verdict moves within the "
+                "spec's estimated ranges"
+                if on_spec
+                else ""
             ),
             "",
         ]
     lines += [
         f"- {_label(r)}: {disagreement_cause(r)}"
         + (f"; MuJoCo does not decide it: {noisy[trial_key(r)]}" if trial_key(r) in noisy else "")
+        + (f"; {spec[trial_key(r)]}" if trial_key(r) in spec else "")
         for r in wrong
     ] or ["none"]
     lines += replica_section(rows, _label)
@@ -352,6 +378,7 @@ def _label(r) -> str:
         f"{r['actuators']}"
         + (f", {scale}" if scale else "")
         + (f", robot {robot}" if robot and robot != "default" else "")
+        + (f", spec at {spec_end(r)}" if spec_end(r) != NOMINAL else "")
         + _gait_label(r)
     )
 

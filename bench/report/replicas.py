@@ -15,11 +15,21 @@ models. ``replica_section(rows)`` writes, for a table of more than one seed:
 
 ``undecided(tables)`` collects those trials over a report's tables, so that a
 disagreement on one of them in a table of one seed says MuJoCo does not decide it.
+
+Spec ends (a sweep with ``spec_ends``, ``sweep/config.py``) replay trials on the spec with
+one estimated value at an end of its range (its ``spec_end`` column). ``spec_groups``
+pairs each trial's nominal row with its rows at the ends, over all of a report's tables
+(by ``trial_key``, which leaves the spec end aside); ``spec_decides`` names the trials
+whose simulated verdict moves within the ranges, and ``spec_end_section`` counts, per
+table of nominal rows and actuator mode, the agreement on the trials the spec decides and
+that of the predicted verdict where it does not move itself.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
+
+NOMINAL = "nominal"  # the spec_end of a row played on the spec's own values (or without one)
 
 # the inputs that make a trial, seed and noise aside (a sweep table's columns), and those
 # of a drawn or given gait (``tables.sweep.GAIT_COLUMNS``), in the tables that have them
@@ -127,3 +137,101 @@ def undecided(tables: dict[str, list[dict]]) -> dict[tuple, str]:
                 key, f"walks under {walked}/{len(group)} seeds of command noise ({name})"
             )
     return out
+
+
+def spec_end(r) -> str:
+    """The spec end ``r`` was played at: ``"KEY:low"``, ``"KEY:high"`` or ``"nominal"``
+    (a table without the column)."""
+    return r.get("spec_end") or NOMINAL
+
+
+def spec_groups(tables: dict[str, list[dict]]) -> dict[tuple, dict[str, dict]]:
+    """Trial inputs → {spec end → row}, over all ``tables`` (errors and rows with command
+    noise aside; the first row of each end kept), for each trial played both at its
+    nominal spec and at one end or more."""
+    by_trial: dict[tuple, dict[str, dict]] = defaultdict(dict)
+    for rows in tables.values():
+        for r in rows:
+            if r["simulated_verdict"] == "error" or r.get("command_noise_deg", 0):
+                continue
+            by_trial[trial_key(r)].setdefault(spec_end(r), r)
+    return {k: ends for k, ends in by_trial.items() if NOMINAL in ends and len(ends) > 1}
+
+
+def _moves(ends: dict[str, dict], column: str) -> bool:
+    return len({_walks(r[column]) for r in ends.values()}) > 1
+
+
+def spec_decides(tables: dict[str, list[dict]]) -> dict[tuple, str]:
+    """Trial inputs → "walks at …; not at …" for each trial whose simulated verdict (walks
+    or not) differs between its nominal spec and a spec end (``spec_groups``): a
+    disagreement on it says the spec's estimates, not the predictor, decide it."""
+    out = {}
+    for key, ends in spec_groups(tables).items():
+        if _moves(ends, "simulated_verdict"):
+            walks = [e for e, r in ends.items() if _walks(r["simulated_verdict"])]
+            not_ = [e for e, r in ends.items() if not _walks(r["simulated_verdict"])]
+            out[key] = (
+                f"the spec's estimates decide it (walks at {', '.join(walks)}; "
+                f"not at {', '.join(not_)})"
+            )
+    return out
+
+
+def spec_end_section(
+    tables: dict[str, list[dict]], share, everything: dict[str, list[dict]] | None = None
+) -> list[str]:
+    """Markdown: per table of ``tables`` whose nominal rows have spec ends in
+    ``everything`` (all of the report's tables; default ``tables``) and per actuator mode,
+    how many trials the spec ends move in MuJoCo, how many of the predicted verdict's
+    disagreements fall on them, the agreement of each verdict on the trials they do not
+    move, and the predicted verdict hedged by its own ends (``uncertain`` where it moves
+    itself). ``share``: (k, n) → its text with an interval (``fidelity._share``). [] when
+    no trial has ends."""
+    groups = spec_groups(everything or tables)
+    out = []
+    for name, rows in tables.items():
+        nominal = [
+            r for r in rows if spec_end(r) == NOMINAL and trial_key(r) in groups
+            and r["simulated_verdict"] != "error" and not r.get("command_noise_deg", 0)
+        ]  # fmt: skip
+        for mode in sorted({r["actuators"] for r in nominal}):
+            sub = [r for r in nominal if r["actuators"] == mode]
+            ends = sorted({e for r in sub for e in groups[trial_key(r)]} - {NOMINAL})
+            moved = {id(r) for r in sub if _moves(groups[trial_key(r)], "simulated_verdict")}
+            decided = [r for r in sub if id(r) not in moved]
+            missed = [r for r in sub if not _agrees(r, "predicted_verdict")]
+            on_moved = sum(id(r) in moved for r in missed)
+            sure = [r for r in sub if not _moves(groups[trial_key(r)], "predicted_verdict")]
+            cells = [
+                share(sum(_agrees(r, c) for r in decided), len(decided))
+                for c in ("analytic_verdict", "compliant_verdict", "predicted_verdict")
+            ]
+            unsure = len(sub) - len(sure)
+            out.append(
+                f"| {name} | {mode} | {len(sub)} | {len(ends)} | "
+                f"{len(moved)}/{len(sub)} {len(moved) / len(sub):.1%} | "
+                f"{on_moved}/{len(missed)} | " + " | ".join(cells) + " | "
+                f"{share(sum(_agrees(r, 'predicted_verdict') for r in sure), len(sure))}; "
+                f"uncertain {unsure}/{len(sub)} {unsure / len(sub):.1%} |"
+            )
+    if not out:
+        return []
+    return [
+        "## Where the spec's estimates decide the simulated verdict",
+        "",
+        "Trials replayed with one value of the spec's `[uncertain]` table at an end of its "
+        "range (a sweep's `spec_ends`; the `spec_end` column), paired with their nominal "
+        "rows. *moved*: trials whose simulated verdict (walks or not) differs at an end; "
+        "*misses on them*: the predicted verdict's disagreements (nominal spec) among them; "
+        "*decided*: each verdict's agreement on the other trials; *spec-hedged*: the "
+        "predicted verdict where it says the same at every end, `uncertain` where it moves "
+        "itself (what the predictor can know without MuJoCo), its agreement on the trials "
+        "it decides and its share of `uncertain`.",
+        "",
+        "| table | mode | trials | ends | moved | misses on them | paper, decided | "
+        "compliant, decided | predicted, decided | predicted, spec-hedged |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        *out,
+        "",
+    ]

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -220,6 +220,21 @@ def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
         if tuple(columns) == fmt.columns:
             return fmt
     return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)
+
+
+SPEC_END_COLUMNS = ("spec_end",)  # a sweep with spec_ends: the spec end each row was played at
+
+
+def spec_end_format(fmt: TableFormat) -> TableFormat:
+    """``fmt`` of a sweep with ``spec_ends`` (``sweep/config.py``): the ``spec_end`` column
+    after every other (``"nominal"``, ``"KEY:low"``, ``"KEY:high"``), so each column of
+    ``fmt`` keeps its place; the same sweep's table without it is refused as such."""
+    return replace(
+        fmt,
+        columns=(*fmt.columns, *SPEC_END_COLUMNS),
+        siblings=((fmt.columns, "its rows were played on the nominal spec alone"), *fmt.siblings),
+        previous_layouts=(),
+    )
 
 
 def format_row(row: dict, columns: tuple[str, ...] = COLUMNS) -> bytes:

@@ -71,3 +71,74 @@ def test_a_disagreement_in_a_one_seed_table_says_when_the_noise_decides_its_tria
     text = fidelity_report({"single": single, "noise": [r | extra for r in ROWS]})
     assert "MuJoCo does not decide it: walks under 2/3 seeds of command noise (noise)" in text
     assert "1 of them on trials whose simulated verdict command noise decides" in text
+
+
+# --- spec ends ----------------------------------------------------------------------------------
+
+LOW, HIGH = "servo.armature:low", "servo.armature:high"
+
+
+def _at(step_time, end, simulated, predicted):
+    r = _row(step_time, 0, simulated, predicted) | {"actuators": "servo", "command_noise_deg": 0.0}
+    return r | {"compliant_verdict": "stable"} | ({"spec_end": end} if end else {})
+
+
+NOMINAL_ROWS = [  # a table without the column: every row nominal
+    _at(1.0, None, "stable", "stable"),  # A: tips at the high end; predicted agrees
+    _at(0.5, None, "fall", "stable"),  # B: walks at the high end; predicted misses, moves itself
+    _at(0.4, None, "fall", "tip"),  # C: decided; agrees
+    _at(0.3, None, "tip", "stable"),  # D: decided; missed
+    _at(0.2, None, "stable", "stable"),  # E: no ends: not counted
+]
+END_ROWS = [
+    _at(1.0, LOW, "stable", "stable"), _at(1.0, HIGH, "tip", "stable"),
+    _at(0.5, LOW, "fall", "tip"), _at(0.5, HIGH, "stable", "stable"),
+    _at(0.4, LOW, "fall", "tip"), _at(0.4, HIGH, "fall", "tip"),
+    _at(0.3, LOW, "tip", "stable"), _at(0.3, HIGH, "tip", "stable"),
+    _at(0.3, HIGH, "error", "error") | {"seed": 1},  # errors are no replica
+]  # fmt: skip
+
+
+def test_spec_ends_pair_with_the_nominal_rows_of_any_table():
+    from slopewalk.bench.report.replicas import spec_decides, spec_groups
+
+    tables = {"nom": NOMINAL_ROWS, "ends": END_ROWS}
+    groups = spec_groups(tables)
+    assert sorted(k[0] for k in groups) == [0.3, 0.4, 0.5, 1.0]  # E has no ends
+    assert all(set(g) == {"nominal", LOW, HIGH} for g in groups.values())
+    decides = spec_decides(tables)
+    assert sorted(k[0] for k in decides) == [0.5, 1.0]
+    assert decides[next(k for k in decides if k[0] == 1.0)] == (
+        f"the spec's estimates decide it (walks at nominal, {LOW}; not at {HIGH})"
+    )
+    assert spec_decides({"ends": END_ROWS}) == {}  # no nominal row: nothing to pair
+
+
+def test_the_spec_end_section_counts_by_hand():
+    from slopewalk.bench.report.replicas import spec_end_section
+
+    lines = spec_end_section({"nom": NOMINAL_ROWS}, lambda k, n: f"{k}/{n}", {
+        "nom": NOMINAL_ROWS, "ends": END_ROWS})  # fmt: skip
+    # 4 trials with ends, 2 ends; A and B move; of the misses (B, D) B is on them; decided
+    # C, D: the paper (stable everywhere) 0/2, the predicted 1/2; the predicted verdict moves
+    # on B only: of A, C, D it agrees on A and C
+    row = "| nom | servo | 4 | 2 | 2/4 50.0% | 1/2 | 0/2 | 0/2 | 1/2 | 2/3; uncertain 1/4 25.0% |"
+    assert row in lines
+    assert spec_end_section({"nom": NOMINAL_ROWS}, str) == []  # no ends anywhere
+
+
+def test_a_disagreement_says_when_the_spec_decides_its_trial():
+    from slopewalk.bench.report.fidelity import fidelity_report
+
+    extra = dict.fromkeys(
+        ("predicted_events", "events", "predicted_rotation_deg", "compliant_min_margin_mm"), 0.0
+    ) | {"unplanned_support_s": 0.0, "tracking_rms_deg": 0.1, "analytic_min_margin_mm": 1.0}
+    extra |= {"first_event_time_s": 1.0, "simulated_max_tilt_deg": 0.0}
+    text = fidelity_report(
+        {"nom": [r | extra for r in NOMINAL_ROWS]},
+        held_out={"ends": [r | extra for r in END_ROWS]},
+    )
+    assert "## Where the spec's estimates decide the simulated verdict" in text
+    assert "1 of them on trials whose simulated verdict moves within the spec's" in text
+    assert f"; the spec's estimates decide it (walks at {HIGH}; not at nominal, {LOW})" in text
+    assert f"t_c 1 s, 0°, μ 1, servo, spec at {HIGH}" in text  # a replica's own miss

@@ -57,7 +57,7 @@ from slopewalk.bench.experiments.envelope.cell import FAMILIES, EnvelopeCell, Se
 from slopewalk.bench.experiments.sweep.config import (
     IMPORTED,
     SweepError,
-    _body,
+    _bodies,
     _controller,
     _known,
     _number,
@@ -183,7 +183,7 @@ def _parse(data: dict, base_dir: Path, source: str, model: ModelFile | None) -> 
             f"leave robot out (the spec imported from {model.name} now) or name a spec of "
             "'slopewalk robot import'"
         )
-    bodies = [_body(r, (), robots, base_dir, where) for r in given_robots]
+    bodies = [b for r in given_robots for b in _bodies(r, (), robots, base_dir, where)]
     bodies = list({b.spec_json: b for b in reversed(bodies)}.values())[::-1]  # first kept
     playable = ACTUATOR_MODES if model is None else _model_modes(bodies)
     given_modes = _list(grid, "actuators", list(playable), source)

@@ -6,6 +6,7 @@ Format (degrees at this edge, like the CLI)::
     steps = 4          # steps per walk, >= 1 (4)
     seed = 0           # recorded with every row, >= 0, or a list of them: each trial per seed (0)
     command_noise = 0  # [deg], σ of white noise on every command row, in [0, 0.5] (0)
+    spec_ends = ["servo.armature:low", "servo.armature:high"]   # optional (below)
 
     [grid]             # the product of these lists; a key left out takes its default
     step_time = [1.0, 0.5]                 # [s], > 0 (1.0, the nominal step time)
@@ -71,12 +72,22 @@ noise of that σ, seeded by its ``trial_id``, so each seed of a list is a replic
 the sweep. The noise enters the hash only when set, and such a sweep's table has a
 ``command_noise_deg`` column (``tables.sweep.NOISE_COLUMNS``); it is refused beside a
 controller (the closed loop's commands are its own).
+
+Spec ends probe how much of a verdict the values the spec only estimates decide:
+``spec_ends`` lists ``"KEY:low"``/``"KEY:high"`` (a key of every robot's ``[uncertain]``
+table, ``planner/uncertainty.py``) and ``"nominal"``; each trial is played once per entry,
+on its robot's spec with that one value at that end of its range (before any mass
+scaling; a drawn gait is drawn on the nominal spec, so each replica walks the nominal
+trial's gait). The changed spec gives new ids, and such a sweep's table has a ``spec_end``
+column after every other (``tables.sweep.spec_end_format``), which ``slopewalk fidelity``
+pairs with the nominal trial's rows in any table (``report/replicas.py``). Refused with a
+model (its spec has no ``[uncertain]`` table).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -85,6 +96,7 @@ import numpy as np
 from slopewalk.bench.actuators import DEFAULT_MODE, actuator_mode
 from slopewalk.bench.experiments.sweep.trials import (  # noqa: F401 (TIMESTEP, SweepTrial: re-exported)
     AXES,
+    NOMINAL,
     TIMESTEP,
     Body,
     Box,
@@ -98,11 +110,12 @@ from slopewalk.bench.sim.trial_spec import MAX_COMMAND_NOISE_DEG
 from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.spec import LINK_NAMES, RobotSpec, load_spec
+from slopewalk.planner.uncertainty import load_uncertainty, spec_at
 
 SWEEPS_DIR = Path(__file__).parents[1] / "sweeps"  # bench/experiments/sweeps/
 DEFAULT_SWEEP = SWEEPS_DIR / "paper.toml"
-TOP_KEYS = ("description", "steps", "seed", "command_noise", "draw", "envelope", "model", "map",
-            "grid", "trial")  # fmt: skip
+TOP_KEYS = ("description", "steps", "seed", "command_noise", "spec_ends", "draw", "envelope",
+            "model", "map", "grid", "trial")  # fmt: skip
 DRAW_KEYS = ("family", "gaits", "seed")
 TRIAL_KEYS = ("step_time", "slope", "friction", "actuators", "robot", "mass_scale", "controller")
 DEFAULTS = {
@@ -138,6 +151,7 @@ class SweepConfig:
     description: str = ""
     command_noise_deg: float = 0.0  # [deg]
     model: ModelFile | None = None  # every trial played on this model (``sweep --model``)
+    spec_ends: tuple[str, ...] = ()  # the file's ``spec_ends`` (module doc); (): none
 
     @cached_property
     def trials(self) -> TrialSet:
@@ -210,21 +224,28 @@ def sweep_from_dict(
     grids = _tables(data, "grid", source)
     singles = _tables(data, "trial", source)
     gaits = _draws(data.get("draw"), source)
+    ends = _spec_ends(data.get("spec_ends"), source)
     model = model or file_model(data, base_dir, source, SweepError)
+    if ends and model is not None:
+        raise SweepError(
+            f"{source}: spec_ends with a model: the spec imported from it has no [uncertain] "
+            "table; name an edited spec with one as robot instead"
+        )
     if "envelope" in data and model is not None:
         raise SweepError(
             f"{source}: envelope with a model: the envelope tables' gaits are the default "
             "robot's; run 'slopewalk envelope --model' for the model's own"
         )
     if "envelope" in data:
-        return _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, description)
+        config = _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends)
+        return replace(config, description=description, spec_ends=ends)
     if gaits != (None,) and (noise or singles):
         raise SweepError(
             f"{source}: [draw] goes with a [grid] alone (no command_noise, no [[trial]])"
         )
     if not grids and not singles:
         raise SweepError(f"{source}: no trials: give a [grid] table or [[trial]] entries")
-    robots: dict[str, RobotSpec] = {}
+    robots: dict = {}  # specs by robot key, bodies by (robot, scale, ends) (``_bodies``)
     defaults = DEFAULTS
     if model is not None:
         robots[IMPORTED] = model.scene().spec
@@ -243,13 +264,13 @@ def sweep_from_dict(
                 raise SweepError(f"{source}: {where}.{key} = {values!r}: must be a non-empty list")
             axes[key] = values
         where = f"{source}: {where}"
-        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, gaits, model))
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, gaits, model, ends))
     for where, table in singles:
         _known(table, TRIAL_KEYS, f"{where}.", source)
         axes = {key: [table.get(key, defaults[key])] for key in TRIAL_KEYS}
         where = f"{source}: {where}"
-        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, model=model))
-    return SweepConfig(source, steps, seeds, tuple(boxes), description, noise, model)
+        boxes.append(_box(axes, steps, seeds, noise, robots, base_dir, where, (None,), model, ends))
+    return SweepConfig(source, steps, seeds, tuple(boxes), description, noise, model, ends)
 
 
 def file_model(data: dict, base_dir: Path, source: str, error: type[SlopewalkError]):
@@ -305,7 +326,7 @@ def _seeds(value, source: str) -> tuple[int, ...]:
     return tuple(values)
 
 
-def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, description):
+def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends):
     """The sweep of every gait the envelope tables of ``data["envelope"]`` played, in each
     ``actuators`` mode of the one ``[grid]`` (module doc)."""
     paths = data["envelope"]
@@ -318,15 +339,15 @@ def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, descri
             "[[trial]], draw or command_noise)"
         )
     modes = grids[0][1].get("actuators", [DEFAULTS["actuators"]])
-    robots: dict[str, RobotSpec] = {}
+    robots: dict = {}  # specs by robot key, bodies by (robot, scale, ends) (``_bodies``)
     boxes = []
     for path in paths:
         for k, (cell, gait) in enumerate(_envelope_gaits(base_dir / path, source)):
             axes = cell | {"actuators": modes}
             axes |= {"mass_scale": [{}], "controller": [OPEN_LOOP]}
             where = f"{source}: {path} gait {k}"
-            boxes.append(_box(axes, steps, seeds, 0.0, robots, base_dir, where, (gait,)))
-    return SweepConfig(source, steps, seeds, tuple(boxes), description, 0.0)
+            boxes.append(_box(axes, steps, seeds, 0.0, robots, base_dir, where, (gait,), ends=ends))
+    return SweepConfig(source, steps, seeds, tuple(boxes))
 
 
 def _envelope_gaits(path: Path, source: str):
@@ -402,7 +423,16 @@ def _draws(value, source: str) -> tuple[GaitChoice | None, ...]:
 
 
 def _box(
-    axes: dict[str, list], steps, seeds, noise, robots, base_dir, where, gaits=(None,), model=None
+    axes: dict[str, list],
+    steps,
+    seeds,
+    noise,
+    robots,
+    base_dir,
+    where,
+    gaits=(None,),
+    model=None,
+    ends=(),
 ) -> Box:
     """Check each value of each axis once; the grid as a ``Box`` (of trials on ``model``)."""
     if model is not None:
@@ -418,9 +448,10 @@ def _box(
     for actuators in axes["actuators"]:
         actuator_mode(actuators, SweepError, f"{where}.actuators =")
     bodies = [
-        _body(robot, _mass_scale(scale, where), robots, base_dir, where)
+        body
         for robot in axes["robot"]
         for scale in axes["mass_scale"]
+        for body in _bodies(robot, _mass_scale(scale, where), robots, base_dir, where, ends)
     ]
     controllers = [_controller(v, where) for v in axes["controller"]]
     if model is not None:
@@ -498,23 +529,71 @@ def _tables(data: dict, key: str, source: str) -> list[tuple[str, dict]]:
     raise SweepError(f"{source}: {key} must be a table [{key}] or an array of tables [[{key}]]")
 
 
-def _body(robot, scale, robots, base_dir, where) -> Body:
+def _bodies(robot, scale, robots: dict, base_dir, where, ends=()) -> list[Body]:
+    """The robot ``robot`` with its mass ``scale``, once per spec end of ``ends`` (the
+    nominal spec alone for none; module doc). ``robots``: the sweep's cache of specs by
+    robot key, and of these lists by (robot, scale, ends)."""
     if not isinstance(robot, str) or not robot:
         raise SweepError(f"{where}.robot = {robot!r}: must be a spec file path")
+    path = None if robot == "default" else base_dir / robot
     if robot not in robots:
-        path = None if robot == "default" else base_dir / robot
         try:
             robots[robot] = load_spec(path)
         except SlopewalkError as err:
             raise SweepError(f"{where}.robot: {err}") from None
-    spec = robots[robot]
-    if scale:
-        factors = dict.fromkeys(LINK_NAMES, 1.0)
-        for group, factor in scale:
-            for name in MASS_GROUPS[group]:
-                factors[name] *= factor
-        spec = spec.with_mass_scale(factors)
-    return Body(robot, scale, spec, spec_text(spec))
+    made = (robot, scale, ends)  # an envelope sweep has a box per gait, each of these bodies
+    if made in robots:
+        return robots[made]
+    base = robots[robot]
+    nominal = _scaled(base, scale)
+    if not ends:
+        robots[made] = [Body(robot, scale, nominal, spec_text(nominal))]
+        return robots[made]
+    try:
+        ranges = {u.key: u for u in load_uncertainty(path)}
+    except SlopewalkError as err:
+        raise SweepError(f"{where}.robot: {err}") from None
+    out = []
+    for end in ends:
+        if end == NOMINAL:
+            out.append(Body(robot, scale, nominal, spec_text(nominal)))
+            continue
+        key, _, side = end.rpartition(":")
+        if key not in ranges:
+            raise SweepError(
+                f"{where}: spec_ends {end!r}: {key} is not in robot {robot!r}'s [uncertain] "
+                f"table (it has: {', '.join(ranges) or 'none'})"
+            )
+        value = ranges[key].low if side == "low" else ranges[key].high
+        spec = _scaled(spec_at(base, key, value), scale)
+        out.append(Body(robot, scale, spec, spec_text(spec), end, nominal))
+    robots[made] = out
+    return out
+
+
+def _scaled(spec: RobotSpec, scale) -> RobotSpec:
+    if not scale:
+        return spec
+    factors = dict.fromkeys(LINK_NAMES, 1.0)
+    for group, factor in scale:
+        for name in MASS_GROUPS[group]:
+            factors[name] *= factor
+    return spec.with_mass_scale(factors)
+
+
+def _spec_ends(value, source: str) -> tuple[str, ...]:
+    """The top-level ``spec_ends``: a non-empty list of distinct ``"nominal"``,
+    ``"KEY:low"`` or ``"KEY:high"`` (the keys checked per robot, ``_bodies``); () if absent."""
+    if value is None:
+        return ()
+    what = 'must be a non-empty list of distinct "nominal", "KEY:low" or "KEY:high"'
+    if not isinstance(value, list) or not value or len(set(map(repr, value))) < len(value):
+        raise SweepError(f"{source}: spec_ends = {value!r}: {what}")
+    for end in value:
+        key, _, side = end.rpartition(":") if isinstance(end, str) else ("", "", "")
+        if end != NOMINAL and not (key and side in ("low", "high")):
+            raise SweepError(f"{source}: spec_ends entry {end!r}: {what}")
+    return tuple(value)
 
 
 def _controller(value, where: str) -> str | None:

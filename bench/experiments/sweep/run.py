@@ -54,6 +54,7 @@ from slopewalk.bench.tables.sweep import (
     SWEEP_GAIT,
     SWEEP_NOISE,
     outcome_columns,
+    spec_end_format,
 )
 from slopewalk.bench.tables.table import model_format
 from slopewalk.planner import pace
@@ -301,6 +302,8 @@ def run_sweep(
         if config.closed_loop
         else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP))
     )
+    if config.spec_ends:
+        fmt = spec_end_format(fmt)
     result = run_batch(
         replace(
             SWEEP_BATCH,

@@ -29,6 +29,7 @@ from slopewalk.planner.spec import RobotSpec
 
 TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk
+NOMINAL = "nominal"  # the spec_end of a trial on the spec's own values
 
 
 DRAW_BATCH = 64  # gaits drawn at once, the first admissible one taken
@@ -118,6 +119,12 @@ class SweepTrial:
         gait_choice: The gait walked instead of the nominal one (drawn or given), or None.
         model: The unmodified model the plan is played on (``sweep --model``), ``spec``
             its imported spec; None: the spec's twin.
+        spec_end: ``"KEY:low"`` or ``"KEY:high"`` where ``spec`` has one value of its
+            robot's ``[uncertain]`` table at that end (``sweep/config.py``), else
+            ``"nominal"``.
+        draw_spec: The spec a drawn gait is drawn on, where ``spec`` is at a spec end
+            (the nominal one, mass scaling applied: a replica walks the nominal trial's
+            gait); None: ``spec``.
     """
 
     step_time: float
@@ -134,6 +141,8 @@ class SweepTrial:
     command_noise_deg: float = 0.0
     gait_choice: GaitChoice | None = None
     model: ModelFile | None = None
+    spec_end: str = NOMINAL
+    draw_spec: RobotSpec | None = field(default=None, repr=False, compare=False)
 
     @cached_property
     def trial_id(self) -> str:
@@ -188,6 +197,8 @@ class SweepTrial:
             text += f" gait {self.gait_choice.source}"
         if self.model is not None:
             text += f" model {self.model.name}"
+        if self.spec_end != NOMINAL:
+            text += f" spec {self.spec_end}"
         return text
 
     @cached_property
@@ -195,11 +206,13 @@ class SweepTrial:
         """The gait's fields beside the nominal ones (``gait_choice``); {} for the nominal gait."""
         if self.gait_choice is None:
             return {}
-        cell = json.dumps(
-            [self.step_time, self.slope_deg, self.friction, self.spec_json or spec_text(self.spec)]
-        )
+        if self.draw_spec is None:
+            spec, text = self.spec, self.spec_json or spec_text(self.spec)
+        else:  # a spec end's replica walks the nominal trial's gait
+            spec, text = self.draw_spec, spec_text(self.draw_spec)
+        cell = json.dumps([self.step_time, self.slope_deg, self.friction, text])
         slope = float(np.deg2rad(self.slope_deg))
-        return self.gait_choice.overrides(self.spec, self.step_time, slope, cell)
+        return self.gait_choice.overrides(spec, self.step_time, slope, cell)
 
     def gait(self) -> GaitParams:
         """The gait of this trial: the nominal one, or ``gait_choice``'s (radians from here on)."""
@@ -237,6 +250,7 @@ class SweepTrial:
                 "seed": self.seed,
                 "controller": self.controller or "none",  # written only by closed-loop sweeps
                 "command_noise_deg": self.command_noise_deg,  # written only by noisy sweeps
+                "spec_end": self.spec_end,  # written only by sweeps with spec_ends
             }
             | self.gait_inputs()
             | model_inputs(self.model)
@@ -272,12 +286,15 @@ def model_inputs(model: ModelFile | None) -> dict:
 
 @dataclass(frozen=True)
 class Body:
-    """A robot as one grid value: the spec file, its mass scaling, the scaled spec."""
+    """A robot as one grid value: the spec file, its mass scaling, the scaled spec, and the
+    spec end it is at (``SweepTrial.spec_end``, ``draw_spec``)."""
 
     robot: str
     mass_scale: tuple[tuple[str, float], ...]
     spec: RobotSpec = field(repr=False)
     spec_json: str = field(repr=False)  # its part of the trial_id text
+    spec_end: str = NOMINAL
+    draw_spec: RobotSpec | None = field(default=None, repr=False)
 
 
 AXES = ("step_time", "slope", "friction", "actuators", "body", "controller", "gait", "seed")
@@ -391,6 +408,8 @@ class TrialSet(Sequence):
             self._noise,
             gait,
             self._model,
+            body.spec_end,
+            body.draw_spec,
         )
 
     def simulated_steps(self) -> float:
