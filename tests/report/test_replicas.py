@@ -141,4 +141,5 @@ def test_a_disagreement_says_when_the_spec_decides_its_trial():
     assert "## Where the spec's estimates decide the simulated verdict" in text
     assert "1 of them on trials whose simulated verdict moves within the spec's" in text
     assert f"; the spec's estimates decide it (walks at {HIGH}; not at nominal, {LOW})" in text
-    assert f"t_c 1 s, 0°, μ 1, servo, spec at {HIGH}" in text  # a replica's own miss
+    assert "Not listed one by one in a table of spec ends" in text  # the replicas' misses
+    assert "- t_c 1 s, 0°, μ 1, servo:" not in text  # A walks on the nominal spec
