@@ -189,7 +189,7 @@ def spec_end_section(
     itself). ``share``: (k, n) → its text with an interval (``fidelity._share``). [] when
     no trial has ends."""
     groups = spec_groups(everything or tables)
-    out = []
+    out, by_end = [], []
     for name, rows in tables.items():
         nominal = [
             r for r in rows if spec_end(r) == NOMINAL and trial_key(r) in groups
@@ -215,6 +215,7 @@ def spec_end_section(
                 f"{share(sum(_agrees(r, 'predicted_verdict') for r in sure), len(sure))}; "
                 f"uncertain {unsure}/{len(sub)} {unsure / len(sub):.1%} |"
             )
+            by_end += _end_rows(name, mode, [groups[trial_key(r)] for r in sub], ends, share)
     if not out:
         return []
     return [
@@ -234,4 +235,29 @@ def spec_end_section(
         "|---|---|---|---|---|---|---|---|---|---|",
         *out,
         "",
+        "End by end: the trials that walk in MuJoCo, those whose verdict (walks or not) "
+        "differs from the nominal spec's, and the predicted verdict's agreement, made on "
+        "the same moved spec.",
+        "",
+        "| table | mode | spec | walk | moved | predicted agrees |",
+        "|---|---|---|---|---|---|",
+        *by_end,
+        "",
     ]
+
+
+def _end_rows(name, mode, groups: list[dict[str, dict]], ends: list[str], share) -> list[str]:
+    """``spec_end_section``'s end-by-end rows of one table and mode (``groups``: each
+    trial's rows by spec end)."""
+    rows = []
+    for end in [NOMINAL, *ends]:
+        pairs = [(g[NOMINAL], g[end]) for g in groups if end in g]
+        walk = sum(_walks(r["simulated_verdict"]) for _, r in pairs)
+        moved = sum(
+            _walks(n["simulated_verdict"]) != _walks(r["simulated_verdict"]) for n, r in pairs
+        )
+        ok = sum(_agrees(r, "predicted_verdict") for _, r in pairs)
+        rows.append(
+            f"| {name} | {mode} | {end} | {walk}/{len(pairs)} | {moved} | {share(ok, len(pairs))} |"
+        )
+    return rows

@@ -124,6 +124,11 @@ def test_the_spec_end_section_counts_by_hand():
     # on B only: of A, C, D it agrees on A and C
     row = "| nom | servo | 4 | 2 | 2/4 50.0% | 1/2 | 0/2 | 0/2 | 1/2 | 2/3; uncertain 1/4 25.0% |"
     assert row in lines
+    # end by end: A alone walks at the nominal spec, the predicted verdict right on A and C;
+    # at the high end A tips and B walks (both moved), the predicted verdict right on B, C
+    assert "| nom | servo | nominal | 1/4 | 0 | 2/4 |" in lines
+    assert f"| nom | servo | {LOW} | 1/4 | 0 | 3/4 |" in lines
+    assert f"| nom | servo | {HIGH} | 1/4 | 2 | 2/4 |" in lines
     assert spec_end_section({"nom": NOMINAL_ROWS}, str) == []  # no ends anywhere
 
 
