@@ -21,8 +21,10 @@ one estimated value at an end of its range (its ``spec_end`` column). ``spec_gro
 pairs each trial's nominal row with its rows at the ends, over all of a report's tables
 (by ``trial_key``, which leaves the spec end aside); ``spec_decides`` names the trials
 whose simulated verdict moves within the ranges, and ``spec_end_section`` counts, per
-table of nominal rows and actuator mode, the agreement on the trials the spec decides and
-that of the predicted verdict where it does not move itself.
+table of nominal rows and actuator mode, the agreement on the trials the spec decides,
+that of the predicted verdict where it does not move itself, and the share of the specs
+at which the predicted verdict says walk as a probability of walking (Brier score and
+reliability table, beside the paper's binary test).
 """
 
 from __future__ import annotations
@@ -189,7 +191,7 @@ def spec_end_section(
     itself). ``share``: (k, n) → its text with an interval (``fidelity._share``). [] when
     no trial has ends."""
     groups = spec_groups(everything or tables)
-    out, by_end = [], []
+    out, by_end, calibration = [], [], []
     for name, rows in tables.items():
         nominal = [
             r for r in rows if spec_end(r) == NOMINAL and trial_key(r) in groups
@@ -216,6 +218,7 @@ def spec_end_section(
                 f"uncertain {unsure}/{len(sub)} {unsure / len(sub):.1%} |"
             )
             by_end += _end_rows(name, mode, [groups[trial_key(r)] for r in sub], ends, share)
+            calibration.append(_calibration_row(name, mode, [groups[trial_key(r)] for r in sub]))
     if not out:
         return []
     return [
@@ -243,7 +246,48 @@ def spec_end_section(
         "|---|---|---|---|---|---|",
         *by_end,
         "",
+        "As a probability of walking: *p*, the share of the specs played (nominal and ends) "
+        "at which the predicted verdict says `stable`, against whether MuJoCo's robot walks "
+        "on the nominal spec. Brier scores (mean squared error; 0 is perfect) of *p*, of the "
+        "predicted and the paper's verdicts as 0/1, and of MuJoCo's own share of the specs at "
+        "which it walks (the nominal among them: the blur the spec's spread alone makes, not "
+        "a prediction), then "
+        "the reliability table: of the trials with *p* in each bin, how many walk.",
+        "",
+        "| table | mode | Brier: p | predicted 0/1 | paper 0/1 | MuJoCo's share | p = 0 | "
+        "0 < p < ½ | ½ ≤ p < 1 | p = 1 |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        *calibration,
+        "",
     ]
+
+
+def _calibration_row(name, mode, groups: list[dict[str, dict]]) -> str:
+    """``spec_end_section``'s calibration row of one table and mode (module doc; ``groups``:
+    each trial's rows by spec end, the nominal one included)."""
+
+    def walk_share(g, column):
+        return sum(_walks(r[column]) for r in g.values()) / len(g)
+
+    y = [float(_walks(g[NOMINAL]["simulated_verdict"])) for g in groups]
+    p = [walk_share(g, "predicted_verdict") for g in groups]
+
+    def brier(values) -> str:
+        return f"{sum((v - t) ** 2 for v, t in zip(values, y, strict=True)) / len(y):.3f}"
+
+    bins = [lambda x: x == 0, lambda x: 0 < x < 0.5, lambda x: 0.5 <= x < 1, lambda x: x == 1]
+    cells = []
+    for inside in bins:
+        hits = [t for v, t in zip(p, y, strict=True) if inside(v)]
+        cells.append(f"{int(sum(hits))}/{len(hits)} walk" if hits else "-")
+    return (
+        f"| {name} | {mode} | {brier(p)} | "
+        f"{brier([float(_walks(g[NOMINAL]['predicted_verdict'])) for g in groups])} | "
+        f"{brier([float(_walks(g[NOMINAL]['analytic_verdict'])) for g in groups])} | "
+        f"{brier([walk_share(g, 'simulated_verdict') for g in groups])} | "
+        + " | ".join(cells)
+        + " |"
+    )
 
 
 def _end_rows(name, mode, groups: list[dict[str, dict]], ends: list[str], share) -> list[str]:

@@ -129,6 +129,14 @@ def test_the_spec_end_section_counts_by_hand():
     assert "| nom | servo | nominal | 1/4 | 0 | 2/4 |" in lines
     assert f"| nom | servo | {LOW} | 1/4 | 0 | 3/4 |" in lines
     assert f"| nom | servo | {HIGH} | 1/4 | 2 | 2/4 |" in lines
+    # as a probability: p (share of the 3 specs predicted stable) is 1, 2/3, 0, 1 for A-D,
+    # MuJoCo's nominal walk 1, 0, 0, 0: Brier (0 + 4/9 + 0 + 1) / 4 = 13/36; the 0/1
+    # predicted verdict misses B, D (0.5), the paper's (stable everywhere) B, C, D (0.75);
+    # MuJoCo's own shares 2/3, 1/3, 0, 0: (1/9 + 1/9) / 4 = 1/18. Bins: C; -; B; A and D
+    assert (
+        "| nom | servo | 0.361 | 0.500 | 0.750 | 0.056 | 0/1 walk | - | 0/1 walk | 1/2 walk |"
+        in lines
+    )
     assert spec_end_section({"nom": NOMINAL_ROWS}, str) == []  # no ends anywhere
 
 
