@@ -115,3 +115,21 @@ def test_a_sweep_with_spec_ends_writes_the_column_last(tmp_path):
     rows = read_table(tmp_path / "sweep.csv")
     assert [r["spec_end"] for r in rows] == ["nominal", "servo.stall_torque:low"]
     assert all(r["simulated_verdict"] != "error" for r in rows)
+
+
+def test_a_table_of_spec_ends_resumes_and_refuses_the_nominal_layout(tmp_path):
+    from slopewalk.bench.experiments.sweep.run import run_sweep
+    from slopewalk.planner.errors import SlopewalkError
+
+    grid = {"steps": 1, "grid": {"step_time": [1.0]}}
+    ends = _parse(grid | {"spec_ends": ["nominal", "servo.stall_torque:low"]})
+    run_sweep(ends, tmp_path / "ends", workers=1, quiet=True)
+    table = tmp_path / "ends" / "sweep.csv"
+    whole = table.read_bytes()
+    (tmp_path / "ends" / "sweep.partial.csv").write_bytes(b"".join(whole.splitlines(True)[:2]))
+    table.unlink()  # killed after its first row
+    summary = run_sweep(ends, tmp_path / "ends", workers=1, quiet=True, resume=True)
+    assert (summary.resumed, summary.ran) == (1, 1) and table.read_bytes() == whole
+    run_sweep(_parse(grid), tmp_path / "nominal", workers=1, quiet=True)
+    with pytest.raises(SlopewalkError, match="played on the nominal spec alone"):
+        run_sweep(ends, tmp_path / "nominal", workers=1, quiet=True, resume=True)
