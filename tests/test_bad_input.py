@@ -76,6 +76,8 @@ INPUTS = {  # file name in {in} -> content
     "narrow_line.csv": SWEEP_TABLE[: SWEEP_TABLE.index(b"\n") + 1] + b"0123456789ab,1.0\n",
     "noisy_sweep.toml": "command_noise = 1e-4\n" + ENVELOPE,
     "nan_noise_sweep.toml": "command_noise = nan\n" + ENVELOPE,
+    "ends_sweep.toml": 'spec_ends = ["servo.armature:low"]\n' + ENVELOPE,
+    "nan_ends_sweep.toml": "spec_ends = [nan]\n" + ENVELOPE,
     "envelope_module.toml": ENVELOPE + 'controller = ["no_such_module:f"]\n',
     "envelope_name.toml": ENVELOPE + 'controller = ["ankle_cop_feedback"]\n',
     "envelope_number.toml": ENVELOPE + "controller = [1]\n",
@@ -309,6 +311,11 @@ CASES = [
         "command_noise = 0.0001 deg: the controllers make their own commands",
     ),
     (["sweep", "{in}/nan_noise_sweep.toml"], "command_noise = nan: must be a finite number"),
+    (
+        ["controllers", "{in}/ends_sweep.toml"],
+        "spec_ends = ['servo.armature:low']: the controllers' table has no spec_end column",
+    ),
+    (["sweep", "{in}/nan_ends_sweep.toml"], "spec_ends entry nan: must be a non-empty list"),
     (
         ["controllers", "--envelope", "{in}/a_file", "--min-step-time", "0"],
         "--min-step-time: 0: must lie in (0, 60] s",
