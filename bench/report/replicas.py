@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-NOMINAL = "nominal"  # the spec_end of a row played on the spec's own values (or without one)
+from slopewalk.bench.tables.sweep import NOMINAL  # the spec_end of a row on the spec's own values
 
 # the inputs that make a trial, seed and noise aside (a sweep table's columns), and those
 # of a drawn or given gait (``tables.sweep.GAIT_COLUMNS``), in the tables that have them
@@ -180,17 +180,14 @@ def spec_decides(tables: dict[str, list[dict]]) -> dict[tuple, str]:
     return out
 
 
-def spec_end_section(
-    tables: dict[str, list[dict]], share, everything: dict[str, list[dict]] | None = None
-) -> list[str]:
-    """Markdown: per table of ``tables`` whose nominal rows have spec ends in
-    ``everything`` (all of the report's tables; default ``tables``) and per actuator mode,
-    how many trials the spec ends move in MuJoCo, how many of the predicted verdict's
-    disagreements fall on them, the agreement of each verdict on the trials they do not
-    move, and the predicted verdict hedged by its own ends (``uncertain`` where it moves
-    itself). ``share``: (k, n) → its text with an interval (``fidelity._share``). [] when
-    no trial has ends."""
-    groups = spec_groups(everything or tables)
+def spec_end_section(tables: dict[str, list[dict]], share) -> list[str]:
+    """Markdown: per table of ``tables`` whose nominal rows have spec ends in any of them
+    (``spec_groups``) and per actuator mode, how many trials the spec ends move in MuJoCo,
+    how many of the predicted verdict's disagreements fall on them, the agreement of each
+    verdict on the trials they do not move, and the predicted verdict hedged by its own ends
+    (``uncertain`` where it moves itself). ``share``: (k, n) → its text with an interval
+    (``fidelity._share``). [] when no trial has ends."""
+    groups = spec_groups(tables)
     out, by_end, calibration = [], [], []
     for name, rows in tables.items():
         nominal = [
@@ -199,7 +196,8 @@ def spec_end_section(
         ]  # fmt: skip
         for mode in sorted({r["actuators"] for r in nominal}):
             sub = [r for r in nominal if r["actuators"] == mode]
-            ends = sorted({e for r in sub for e in groups[trial_key(r)]} - {NOMINAL})
+            trials = [groups[trial_key(r)] for r in sub]
+            ends = sorted({e for g in trials for e in g} - {NOMINAL})
             moved = {id(r) for r in sub if _moves(groups[trial_key(r)], "simulated_verdict")}
             decided = [r for r in sub if id(r) not in moved]
             missed = [r for r in sub if not _agrees(r, "predicted_verdict")]
@@ -217,8 +215,8 @@ def spec_end_section(
                 f"{share(sum(_agrees(r, 'predicted_verdict') for r in sure), len(sure))}; "
                 f"uncertain {unsure}/{len(sub)} {unsure / len(sub):.1%} |"
             )
-            by_end += _end_rows(name, mode, [groups[trial_key(r)] for r in sub], ends, share)
-            calibration.append(_calibration_row(name, mode, [groups[trial_key(r)] for r in sub]))
+            by_end += _end_rows(name, mode, trials, ends, share)
+            calibration.append(_calibration_row(name, mode, trials))
     if not out:
         return []
     return [

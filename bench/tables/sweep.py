@@ -223,6 +223,7 @@ def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
 
 
 SPEC_END_COLUMNS = ("spec_end",)  # a sweep with spec_ends: the spec end each row was played at
+NOMINAL = "nominal"  # its value for a row played on the spec's own values
 
 
 def spec_end_format(fmt: TableFormat) -> TableFormat:

@@ -117,8 +117,7 @@ def test_spec_ends_pair_with_the_nominal_rows_of_any_table():
 def test_the_spec_end_section_counts_by_hand():
     from slopewalk.bench.report.replicas import spec_end_section
 
-    lines = spec_end_section({"nom": NOMINAL_ROWS}, lambda k, n: f"{k}/{n}", {
-        "nom": NOMINAL_ROWS, "ends": END_ROWS})  # fmt: skip
+    lines = spec_end_section({"nom": NOMINAL_ROWS, "ends": END_ROWS}, lambda k, n: f"{k}/{n}")
     # 4 trials with ends, 2 ends; A and B move; of the misses (B, D) B is on them; decided
     # C, D: the paper (stable everywhere) 0/2, the predicted 1/2; the predicted verdict moves
     # on B only: of A, C, D it agrees on A and C

@@ -546,8 +546,9 @@ def _bodies(robot, scale, robots: dict, base_dir, where, ends=()) -> list[Body]:
         return robots[made]
     base = robots[robot]
     nominal = _scaled(base, scale)
+    nominal_json = spec_text(nominal)
     if not ends:
-        robots[made] = [Body(robot, scale, nominal, spec_text(nominal))]
+        robots[made] = [Body(robot, scale, nominal, nominal_json)]
         return robots[made]
     try:
         ranges = {u.key: u for u in load_uncertainty(path)}
@@ -556,7 +557,7 @@ def _bodies(robot, scale, robots: dict, base_dir, where, ends=()) -> list[Body]:
     out = []
     for end in ends:
         if end == NOMINAL:
-            out.append(Body(robot, scale, nominal, spec_text(nominal)))
+            out.append(Body(robot, scale, nominal, nominal_json))
             continue
         key, _, side = end.rpartition(":")
         if key not in ranges:
@@ -566,7 +567,7 @@ def _bodies(robot, scale, robots: dict, base_dir, where, ends=()) -> list[Body]:
             )
         value = ranges[key].low if side == "low" else ranges[key].high
         spec = _scaled(spec_at(base, key, value), scale)
-        out.append(Body(robot, scale, spec, spec_text(spec), end, nominal))
+        out.append(Body(robot, scale, spec, spec_text(spec), end, nominal, nominal_json))
     robots[made] = out
     return out
 

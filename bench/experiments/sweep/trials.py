@@ -23,13 +23,13 @@ from slopewalk.bench.actuators import DEFAULT_MODE
 from slopewalk.bench.robot_import.model_file import ModelFile
 from slopewalk.bench.sim.playback import HOLD_TIME, SETTLE_TIME
 from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.bench.tables.sweep import NOMINAL
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.spec import RobotSpec
 
 TIMESTEP = 0.001  # [s], the simulation step of every sweep trial
 CLOSING_DSP = 1 - GaitParams.ssp_fraction  # [steps] the double support that ends a walk
-NOMINAL = "nominal"  # the spec_end of a trial on the spec's own values
 
 
 DRAW_BATCH = 64  # gaits drawn at once, the first admissible one taken
@@ -124,7 +124,7 @@ class SweepTrial:
             ``"nominal"``.
         draw_spec: The spec a drawn gait is drawn on, where ``spec`` is at a spec end
             (the nominal one, mass scaling applied: a replica walks the nominal trial's
-            gait); None: ``spec``.
+            gait); None: ``spec``. ``draw_json``: its ``spec_text``, made once per robot.
     """
 
     step_time: float
@@ -143,6 +143,7 @@ class SweepTrial:
     model: ModelFile | None = None
     spec_end: str = NOMINAL
     draw_spec: RobotSpec | None = field(default=None, repr=False, compare=False)
+    draw_json: str = field(default="", repr=False, compare=False)
 
     @cached_property
     def trial_id(self) -> str:
@@ -209,7 +210,7 @@ class SweepTrial:
         if self.draw_spec is None:
             spec, text = self.spec, self.spec_json or spec_text(self.spec)
         else:  # a spec end's replica walks the nominal trial's gait
-            spec, text = self.draw_spec, spec_text(self.draw_spec)
+            spec, text = self.draw_spec, self.draw_json
         cell = json.dumps([self.step_time, self.slope_deg, self.friction, text])
         slope = float(np.deg2rad(self.slope_deg))
         return self.gait_choice.overrides(spec, self.step_time, slope, cell)
@@ -295,6 +296,7 @@ class Body:
     spec_json: str = field(repr=False)  # its part of the trial_id text
     spec_end: str = NOMINAL
     draw_spec: RobotSpec | None = field(default=None, repr=False)
+    draw_json: str = field(default="", repr=False)  # draw_spec's part of a draw's seed
 
 
 AXES = ("step_time", "slope", "friction", "actuators", "body", "controller", "gait", "seed")
@@ -410,6 +412,7 @@ class TrialSet(Sequence):
             self._model,
             body.spec_end,
             body.draw_spec,
+            body.draw_json,
         )
 
     def simulated_steps(self) -> float:
