@@ -45,6 +45,14 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   stretches where it sticks (|F_t| < μ F_n) at the run's ends, where it creeps with
   the contact's and the legs' give (measured ≤ 1.5 mm).
 
+* ``ring``: a loop without feed-forward (``servo``) takes each landing's load jump on
+  its spring and rings; where the walk lands again before that ring has settled (its
+  settling time 3 · 2A / (d + kv) longer than the step), the next landing comes on a
+  ringing robot, which the loop's walk, bolted to the plane, cannot follow
+  (``servo_ring``; MuJoCo's robot bounces back onto its old stance foot and falls).
+  Designed on the design GA sets (``ga-dev``, ``ga-dev2``, ``ga-dev-spec-ends``); the
+  development grids and random-dev are unchanged by it (results/README.md, stop 37).
+
 * ``saturation``: the loop asks a servo for more torque than its limit (the stall
   torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
   Like that event it is reported and does not decide the verdict: the limit is
@@ -56,7 +64,9 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   as MuJoCo's falls.
 
 Verdict: the most severe predicted event of ``VERDICT_KINDS``, in the order
-joint_limit, tip, strike, swing_drag, slip, foot_slide; ``stable`` when none.
+joint_limit, tip, strike, swing_drag, slip, foot_slide, ring (a mechanism the models
+follow decides before the ring, which says only that the walk outruns them);
+``stable`` when none.
 """
 
 from __future__ import annotations
@@ -68,6 +78,7 @@ import numpy as np
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
 from slopewalk.planner.kinematics import GRAVITY
+from slopewalk.planner.servo_ring import unsettled_landing
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
@@ -79,7 +90,7 @@ TIP_ANGLE = np.deg2rad(5.0)  # [rad]
 # The paper's verdict: its ZMP test on the planned walk (``Plan.stable``).
 PAPER_VERDICTS = ("stable", "zmp_outside")
 PREDICTED_KINDS = (
-    "joint_limit", "saturation", "tip", "strike", "swing_drag", "slip", "foot_slide"
+    "joint_limit", "saturation", "tip", "strike", "swing_drag", "slip", "foot_slide", "ring"
 )  # fmt: skip
 VERDICT_KINDS = tuple(k for k in PREDICTED_KINDS if k != "saturation")
 SEVERITY = {kind: len(VERDICT_KINDS) - i for i, kind in enumerate(VERDICT_KINDS)}
@@ -279,6 +290,25 @@ def slide_runs(mask, xy):
         yield int(a), np.hypot(*(xy[a:b] - xy[a]).T)
 
 
+def ring_events(plan, settle: float | None) -> list[PredictedEvent]:
+    """``ring`` at the first landing that comes before the last one's ring has settled
+    (``servo_ring``); ``settle``: the loop's settling time [s], None for a loop that
+    takes no load jump on its spring (feed-forward, ``servo_ring`` module doc)."""
+    if settle is None:
+        return []
+    k = unsettled_landing(plan, settle)
+    if k is None:
+        return []
+    return [
+        PredictedEvent(
+            float(plan.t[k]),
+            "ring",
+            f"lands {plan.params.step_time:g} s after the last landing, before the servos' "
+            f"ring settles ({settle:.3g} s to 5 %)",
+        )
+    ]
+
+
 def strike_events(walk, stiffness: float) -> list[PredictedEvent]:
     """``strike`` where a swing-sole strike turns the stance foot past TIP_ANGLE (``strike``).
 
@@ -352,6 +382,7 @@ def predict(
     force_limit: float = np.inf,
     floor_stiffness: float | None = None,
     contact_time: float | None = None,
+    ring_settle: float | None = None,
 ) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
 
@@ -368,6 +399,8 @@ def predict(
             (``bench/sim/floor.py``); None: a rigid floor, no give.
         contact_time: The floor contact's time constant τ [s] (``solref``), how long a
             dragged sole stays loaded per stretch (``foot_slide``); None: a rigid floor.
+        ring_settle: The loop's settling time [s] where it takes the load's jumps on its
+            spring (no feed-forward, ``servo_ring.settle_time``); None: no ``ring`` check.
 
     The swing sole's prop uses the planned clearance: where the servos' sag puts the
     reached walk's sole into the plane, that is ``strike``'s case, not a prop; the
@@ -380,7 +413,7 @@ def predict(
         made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness, props=props
     )
     slips, slide = slip_events(made, friction)
-    events += tips + swing_drag_events(plan, props) + slips
+    events += tips + swing_drag_events(plan, props) + slips + ring_events(plan, ring_settle)
     if walk is not None:
         if stiffness is None:
             raise SlopewalkError(

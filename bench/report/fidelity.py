@@ -453,6 +453,9 @@ def cause_class(r) -> str:
       hip width × (1/cos λ − 1), faster than the soft floor's contacts let a hopping
       sole stay loaded: ``planner.verdict.stretch_slide``), yet the robot walked: no
       loaded foot of MuJoCo's slid that far (its slip detection measures it);
+    * ring the robot rode out: predicted ``ring`` (the walk lands again before the
+      servos' ring from the last landing has settled, ``planner/servo_ring.py``), yet
+      the robot walked: the ring it found was not enough to throw it;
     * unexplained: none of these.
     """
     walks = _walks(r["predicted_verdict"])
@@ -472,6 +475,8 @@ def cause_class(r) -> str:
         return "rocking past the tip angle in the prediction only"
     if r["predicted_verdict"] == "foot_slide" and _walks(r["simulated_verdict"]):
         return "foot slide in the plan only"
+    if r["predicted_verdict"] == "ring" and _walks(r["simulated_verdict"]):
+        return "ring the robot rode out"
     return "unexplained"
 
 

@@ -10,8 +10,9 @@ Three predictions sit side by side (``TrialPrediction``):
 * the predicted verdict: the most severe event ``slopewalk.planner.verdict.predict`` finds on
   the walk the servo loop makes through time (``planner.servo_loop``: its sway, the
   closed chain of double support, the output clipped at the torque limit):
-  joint_limit, tip, strike, swing_drag, slip, foot_slide, or ``stable``; ``saturation`` (the loop
-  asking for more than its limit, on the static walk) is reported beside them.
+  joint_limit, tip, strike, swing_drag, slip, foot_slide, ring, or ``stable``;
+  ``saturation`` (the loop asking for more than its limit, on the static walk) is
+  reported beside them.
 
 The servo is the trial's actuator mode (``model.servo_settings``), and in a
 feedforward mode the loop is fed the same clipped torque as in the simulation
@@ -38,6 +39,7 @@ from slopewalk.bench.sim.playback import feedforward_stance_swing
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import servo_walk
+from slopewalk.planner.servo_ring import settle_time
 from slopewalk.planner.verdict import Prediction, predict
 
 
@@ -98,6 +100,7 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         force_limit=servo.force_limit,
         floor_stiffness=floor_stiffness,
         contact_time=contact_time,
+        ring_settle=_ring_settle(servo),
     )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
@@ -132,6 +135,14 @@ class PredictionBeside:
     def result(self) -> TrialPrediction:
         """The prediction, once its thread is done (waits for it)."""
         return self._future.result()
+
+
+def _ring_settle(servo) -> float | None:
+    """The loop's ring settling time [s] where it takes the load's jumps on its spring
+    (no feed-forward; ``planner/servo_ring.py``), else None: no ``ring`` check."""
+    if servo.feedforward:
+        return None
+    return settle_time(servo.armature, servo.damping + servo.kv)
 
 
 @lru_cache(maxsize=16)

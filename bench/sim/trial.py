@@ -25,7 +25,7 @@ when the planned ZMP stays inside the support polygon at every sample, else
 ``zmp_outside``; ``compliant_verdict``, the same test on the walk the trial's servo
 reaches under the planned torques (series ``zmp_compliant``); ``predicted_verdict``,
 the most severe predicted event (joint_limit, saturation, tip, strike, swing_drag, slip,
-foot_slide) or
+foot_slide, ring) or
 ``stable``, with ``predicted_events``. ``slip_predicted`` when the required friction
 |F_t|/F_n of the planned ground force exceeds μ somewhere. ``unplanned_support_s``
 (``support.py``): foot-time the simulated contacts differed from the plan's.

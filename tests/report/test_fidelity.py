@@ -128,6 +128,14 @@ def test_a_planned_foot_slide_the_robot_walks_through_has_its_class():
     assert cause_class(slid | {"predicted_verdict": "tip"}) == "unexplained"
 
 
+def test_a_ring_the_robot_walks_through_has_its_class():
+    from slopewalk.bench.report.fidelity import cause_class
+
+    rode = _row("stable", "ring", "stable", actuators="servo", compliant_min_margin_mm=-2.0)
+    assert cause_class(rode) == "ring the robot rode out"
+    assert cause_class(rode | {"simulated_verdict": "fall"}) == "unexplained"  # no miss
+
+
 def test_the_hedged_verdict_is_uncertain_where_the_two_models_disagree():
     from slopewalk.bench.report.fidelity import hedged, hedged_agreement
 

@@ -93,3 +93,23 @@ def test_an_error_in_the_prediction_beside_the_rollout_reaches_the_caller(spec, 
     plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, steps=1))
     with pytest.raises(FloatingPointError, match="the servo loop diverged"):
         run_trial(spec, TrialSpec(plan.params), plan=plan)
+
+
+def test_the_ring_is_checked_for_the_loop_without_feedforward_from_the_specs_servo(spec):
+    """``ring`` (planner/servo_ring.py) in ``servo`` only: ``servo_ff`` is fed the load's
+    jumps, a stiff loop settles in hundredths of a second. Its settling time is the
+    spec's: 0.5 s steps ring with the AX-12A's rotor inertia (0.57 s) and not with a
+    quarter of it (0.14 s); 0.75 s steps ring with twice it (1.15 s)."""
+    from dataclasses import replace
+
+    def kinds(s, step_time, actuators):
+        plan = plan_walk(s, GaitParams.nominal(s, step_time, steps=2))
+        return [e.kind for e in predict_trial(plan, friction=1.0, actuators=actuators)
+                .prediction.events]  # fmt: skip
+
+    assert "ring" in kinds(spec, 0.5, "servo")
+    for actuators in ("servo_ff", "stiff", "stiff_ff"):
+        assert "ring" not in kinds(spec, 0.5, actuators)
+    assert "ring" not in kinds(replace(spec, armature=spec.armature / 4), 0.5, "servo")
+    assert "ring" not in kinds(spec, 0.75, "servo")
+    assert "ring" in kinds(replace(spec, armature=spec.armature * 2), 0.75, "servo")
