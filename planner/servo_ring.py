@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
+from slopewalk.planner.trajectory import Timeline
 
 RING_DECAYS = 3.0  # time constants: the ring down to exp(-3), about 5 %
 
@@ -53,16 +54,9 @@ def settle_time(armature: float, damping: float) -> float:
     return RING_DECAYS * 2.0 * armature / damping
 
 
-def landings(plan) -> np.ndarray:
-    """Sample indices where a swing sole touches down (double support begins after
-    single support), (k,): the standing start is not a landing."""
-    both = np.asarray(plan.double_support, dtype=bool)
-    return np.flatnonzero(~both[:-1] & both[1:]) + 1
-
-
 def unsettled_landing(plan, settle: float) -> int | None:
-    """The first landing of ``plan`` that comes less than ``settle`` [s] after the one
-    before it (a sample index), or None."""
-    times = plan.t[landings(plan)]
-    early = np.flatnonzero(np.diff(times) < settle)
-    return None if early.size == 0 else int(landings(plan)[early[0] + 1])
+    """The first touch-down of ``plan`` (``trajectory.Timeline.touch_downs``) that comes
+    less than ``settle`` [s] after the one before it (a sample index), or None."""
+    downs = Timeline.of(plan.params).touch_downs
+    early = np.flatnonzero(np.diff(plan.t[downs]) < settle)
+    return None if early.size == 0 else int(downs[early[0] + 1])

@@ -1,8 +1,6 @@
 """The servo's ring (``planner/servo_ring.py``): its settling time against the free
 response of the joint's own mass-spring, integrated here, and the ``ring`` event."""
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -13,7 +11,8 @@ from scipy.signal import find_peaks
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
-from slopewalk.planner.servo_ring import landings, settle_time, unsettled_landing
+from slopewalk.planner.servo_ring import settle_time, unsettled_landing
+from slopewalk.planner.trajectory import Timeline
 from slopewalk.planner.verdict import PredictedEvent, predict, ring_events, verdict
 
 AX12 = {"armature": 0.0232, "damping": 1.5 / 6.18}  # the default spec's servo (no kv)
@@ -63,21 +62,17 @@ def test_bad_settings_are_refused_in_one_line(bad):
     assert "\n" not in str(err.value)
 
 
-def _walk(times, both):
-    return SimpleNamespace(
-        t=np.asarray(times, float),
-        double_support=np.asarray(both, bool),
-        params=SimpleNamespace(step_time=0.5),
-    )
-
-
-def test_landings_are_where_double_support_begins_after_single_support():
-    walk = _walk(np.arange(10) * 0.1, [1, 1, 0, 0, 1, 1, 0, 0, 0, 1])
-    assert landings(walk).tolist() == [4, 9]
-    # landings 0.5 s apart: a ring that takes longer finds the second one
-    assert unsettled_landing(walk, 0.51) == 9
-    assert unsettled_landing(walk, 0.5) is None
-    assert unsettled_landing(_walk([0, 0.1, 0.2], [1, 0, 1]), 10.0) is None  # one landing
+def test_the_touch_downs_are_where_double_support_begins_after_single_support(spec):
+    plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2))
+    downs = Timeline.of(plan.params).touch_downs
+    both = plan.double_support
+    assert downs.tolist() == (np.flatnonzero(~both[:-1] & both[1:]) + 1).tolist()
+    gap = plan.t[downs[1]] - plan.t[downs[0]]
+    # landings one step apart: a ring that takes longer finds the second one
+    assert unsettled_landing(plan, gap + 1e-6) == downs[1]
+    assert unsettled_landing(plan, gap) is None
+    one = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=1))
+    assert unsettled_landing(one, 10.0) is None  # one landing
 
 
 @pytest.mark.parametrize(("step_time", "rings"), [(0.5, True), (0.75, False)])
@@ -87,7 +82,7 @@ def test_a_walk_faster_than_the_ring_is_predicted_ring(spec, step_time, rings):
     events = ring_events(plan, settle)
     assert bool(events) == rings
     if rings:  # at the second landing, one step after the first
-        first, second = plan.t[landings(plan)[:2]]
+        first, second = plan.t[Timeline.of(plan.params).touch_downs[:2]]
         assert events[0].time == pytest.approx(second)
         assert second - first == pytest.approx(step_time, abs=2e-3)
     assert ring_events(plan, None) == []
