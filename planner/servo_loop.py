@@ -296,14 +296,24 @@ def servo_walk(
     return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held)
 
 
-def _linearised_compiled(plan: Plan):
-    """``linearised`` and ``support_jacobian`` on the compiled kernel (``kernel.dynamics``)."""
+def _linearised_compiled(plan: Plan, rows: np.ndarray | None = None):
+    """``linearised`` and ``support_jacobian`` on the compiled kernel (``kernel.dynamics``),
+    at every sample of ``plan`` or at the sample indices ``rows`` only."""
     from slopewalk.planner.kernel import cache, dynamics
 
     cache.first_use("predictors")
     chain, gravity, side, sole, share = dynamics.plan_inputs(plan)
-    q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (plan.q, plan.qd, plan.qdd))
+    take = slice(None) if rows is None else np.asarray(rows, dtype=np.int64)
+    side, sole, share = (np.ascontiguousarray(a[take]) for a in (side, sole, share))
+    q, qd, qdd = (np.ascontiguousarray(a[take], dtype=float) for a in (plan.q, plan.qd, plan.qdd))
     return dynamics.linearised(chain, gravity, q, qd, qdd, side, sole, share, STEP)
+
+
+def linearised_at(plan: Plan, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """M [kg m²] and K_g [N m/rad] of ``plan``'s chain at the sample indices ``rows``,
+    (len(rows), 8, 8) each: ``linearised``'s at those samples (on the compiled kernel)."""
+    _, mass, gravity_k, _, _ = _linearised_compiled(plan, rows)
+    return mass, gravity_k
 
 
 def _integrate_compiled(*args):

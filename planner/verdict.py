@@ -46,12 +46,12 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   the contact's and the legs' give (measured ≤ 1.5 mm).
 
 * ``ring``: a loop without feed-forward (``servo``) takes each landing's load jump on
-  its spring and rings; where the walk lands again before that ring has settled (its
-  settling time 3 · 2A / (d + kv) longer than the step), the next landing comes on a
-  ringing robot, which the loop's walk, bolted to the plane, cannot follow
-  (``servo_ring``; MuJoCo's robot bounces back onto its old stance foot and falls).
-  Designed on the design GA sets (``ga-dev``, ``ga-dev2``, ``ga-dev-spec-ends``); the
-  development grids and random-dev are unchanged by it (results/README.md, stop 37).
+  its spring and rings; where the walk lands again before that ring has settled (1.8
+  time constants of the loaded chain's slowest mode, longer than the step), the next
+  landing comes on a ringing robot, which the loop's walk, bolted to the plane, cannot
+  follow (``servo_ring``; MuJoCo's robot bounces back onto its old stance foot and
+  falls). Designed on the design GA sets (``ga-dev``, ``ga-dev2``, ``ga-dev-spec-ends``)
+  and their gaits re-timed at four armatures (results/README.md, stops 37 and 38).
 
 * ``saturation``: the loop asks a servo for more torque than its limit (the stall
   torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
@@ -78,7 +78,7 @@ import numpy as np
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
 from slopewalk.planner.kinematics import GRAVITY
-from slopewalk.planner.servo_ring import unsettled_landing
+from slopewalk.planner.servo_ring import RING_DECAYS, unsettled_landing
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
@@ -290,21 +290,24 @@ def slide_runs(mask, xy):
         yield int(a), np.hypot(*(xy[a:b] - xy[a]).T)
 
 
-def ring_events(plan, settle: float | None) -> list[PredictedEvent]:
+def ring_events(plan, settle: np.ndarray | None) -> list[PredictedEvent]:
     """``ring`` at the first landing that comes before the last one's ring has settled
-    (``servo_ring``); ``settle``: the loop's settling time [s], None for a loop that
-    takes no load jump on its spring (feed-forward, ``servo_ring`` module doc)."""
+    (``servo_ring``); ``settle``: the loop's settling time [s] at each touch-down
+    (``servo_ring.settle_times``), None for a loop that takes no load jump on its spring
+    (feed-forward, ``servo_ring`` module doc)."""
     if settle is None:
         return []
-    k = unsettled_landing(plan, settle)
-    if k is None:
+    found = unsettled_landing(plan, settle)
+    if found is None:
         return []
+    k, at = found
     return [
         PredictedEvent(
             float(plan.t[k]),
             "ring",
             f"lands {plan.params.step_time:g} s after the last landing, before the servos' "
-            f"ring settles ({settle:.3g} s to 5 %)",
+            f"ring settles ({at:.3g} s: {RING_DECAYS:g} time constants of the loaded "
+            "joints' slowest mode)",
         )
     ]
 
@@ -382,7 +385,7 @@ def predict(
     force_limit: float = np.inf,
     floor_stiffness: float | None = None,
     contact_time: float | None = None,
-    ring_settle: float | None = None,
+    ring_settle: np.ndarray | None = None,
 ) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
 
@@ -399,8 +402,9 @@ def predict(
             (``bench/sim/floor.py``); None: a rigid floor, no give.
         contact_time: The floor contact's time constant τ [s] (``solref``), how long a
             dragged sole stays loaded per stretch (``foot_slide``); None: a rigid floor.
-        ring_settle: The loop's settling time [s] where it takes the load's jumps on its
-            spring (no feed-forward, ``servo_ring.settle_time``); None: no ``ring`` check.
+        ring_settle: The loop's settling time [s] at each touch-down where it takes the
+            load's jumps on its spring (no feed-forward, ``servo_ring.settle_times``);
+            None: no ``ring`` check.
 
     The swing sole's prop uses the planned clearance: where the servos' sag puts the
     reached walk's sole into the plane, that is ``strike``'s case, not a prop; the

@@ -38,8 +38,8 @@ from slopewalk.bench.sim.model import scene_xml, servo_settings
 from slopewalk.bench.sim.playback import feedforward_stance_swing
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
 from slopewalk.planner.plan import Plan
-from slopewalk.planner.servo_loop import servo_walk
-from slopewalk.planner.servo_ring import settle_time
+from slopewalk.planner.servo_loop import linearised_at, servo_walk
+from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
 from slopewalk.planner.verdict import Prediction, predict
 
 
@@ -100,7 +100,7 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         force_limit=servo.force_limit,
         floor_stiffness=floor_stiffness,
         contact_time=contact_time,
-        ring_settle=_ring_settle(servo),
+        ring_settle=_ring_settle(plan, servo),
     )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
@@ -137,12 +137,16 @@ class PredictionBeside:
         return self._future.result()
 
 
-def _ring_settle(servo) -> float | None:
-    """The loop's ring settling time [s] where it takes the load's jumps on its spring
-    (no feed-forward; ``planner/servo_ring.py``), else None: no ``ring`` check."""
+def _ring_settle(plan: Plan, servo) -> np.ndarray | None:
+    """The loop's ring settling time [s] at each touch-down of ``plan`` where it takes the
+    load's jumps on its spring (no feed-forward; ``planner/servo_ring.py``), from the
+    spec's A, d + kv and kp on the chain's M and K_g before each landing; else None: no
+    ``ring`` check."""
     if servo.feedforward:
         return None
-    return settle_time(servo.armature, servo.damping + servo.kv)
+    loop = RingLoop(servo.armature, servo.damping + servo.kv, servo.kp)
+    mass, gravity_k = linearised_at(plan, landing_rows(plan))
+    return settle_times(mass, gravity_k, loop)
 
 
 @lru_cache(maxsize=16)
