@@ -97,7 +97,9 @@ def slowest_decay(mass: np.ndarray, gravity_k: np.ndarray, loop: RingLoop) -> fl
     eye = np.eye(n)
     inertia = mass + loop.armature * eye
     if not np.all(np.isfinite(inertia)) or abs(np.linalg.det(inertia)) < 1e-300:
-        return 0.0  # no inertia to ring: nothing settles later than at once, or nothing moves
+        # a singular M + A (a joint with no inertia at all) or a non-finite one: no ring
+        # mode to measure, σ 0 (settle_times: 0 s for a massless loop, inf otherwise)
+        return 0.0
     spring = np.linalg.solve(inertia, gravity_k + loop.stiffness * eye)
     drag = np.linalg.solve(inertia, loop.damping * eye)
     state = np.block([[np.zeros((n, n)), eye], [-spring, -drag]])
