@@ -24,7 +24,15 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   design GA set (``bench/experiments/envelopes/ga-dev.toml``: GA gaits with a swing
   lift of 7–14 mm at 0.35–0.75 s, whose low soles prop the rocking and catch; the
   predicted verdict there 75.2 → 88.3 %), random-dev and the development grids
-  (unchanged there, but for one random-dev trial).
+  (unchanged there, but for one random-dev trial). A swing sole the servos' sag presses
+  into the plane past the leg's give props the robot the same way (``strike``: the
+  stance foot's roll about its far edge above zero, ``strike.strike_roll``, though short
+  of ``TIP_ANGLE``); where the servos' walk carries it past ``SLIP_DISTANCE`` within one
+  run of such samples, that is ``swing_drag`` too. Designed on the design GA sets: their
+  saturated ``servo_ff`` gaits at 0.35–0.45 s, whose swing sole the lagging knee lowers
+  into the plane (MuJoCo's robot stands on its swing foot and falls): ga-dev ``servo_ff``
+  102 → 104 of 107, ga-dev2 (its spec ends included) 659 → 663 of 684; ``servo``,
+  ga-dev3 (0.22–0.37 s), dense and random-dev unchanged.
 * ``slip``: where the required friction |F_t|/F_n exceeds μ the ground holds only
   μ F_n; the rest, |F_t| − μ F_n, slides the robot (mass m) along the plane. The
   slide is integrated like the tip rotation and ``slip`` predicted past
@@ -86,6 +94,8 @@ from slopewalk.planner.tipping import excursion_integral, foot_rotation
 SLIP_DISTANCE = 0.005  # [m]
 LOADED_FRACTION = 0.10  # of the robot's weight
 TIP_ANGLE = np.deg2rad(5.0)  # [rad]
+
+STRUCK = "the robot up, struck into the plane"  # what a striking swing sole props (``swing_drag``)
 
 # The paper's verdict: its ZMP test on the planned walk (``Plan.stable``).
 PAPER_VERDICTS = ("stable", "zmp_outside")
@@ -165,13 +175,15 @@ def tip_events(
     ), theta
 
 
-def swing_drag_events(plan, props: np.ndarray) -> list[PredictedEvent]:
+def swing_drag_events(plan, props: np.ndarray, what: str = "the rocking") -> list[PredictedEvent]:
     """``swing_drag`` where the swing sole travels past SLIP_DISTANCE while it props.
 
     Args:
-        plan: The planned walk (its swing sole's path on the plane, ``swing_sole``).
-        props: Boolean (n,): the samples at which the swing sole props the rocking
-            (``tip_events``' ``props``).
+        plan: The walk whose swing sole's path on the plane (``swing_sole``) is judged:
+            the plan where the rocking is propped, the servos' walk where a strike is.
+        props: Boolean (n,): the samples at which the swing sole props the robot
+            (``tip_events``' ``props``, or ``strike.strike_roll`` > 0).
+        what: What the sole props, for the cause line.
     """
     for start, moved in slide_runs(props, plan.swing_sole[:, :2]):
         past = np.flatnonzero(moved > SLIP_DISTANCE)
@@ -181,8 +193,8 @@ def swing_drag_events(plan, props: np.ndarray) -> list[PredictedEvent]:
                 PredictedEvent(
                     float(plan.t[k]),
                     "swing_drag",
-                    f"the swing sole props the rocking from {plan.t[start]:.3f} s and the "
-                    f"plan carries it {moved.max() * 1e3:.1f} mm along the plane meanwhile",
+                    f"the swing sole props {what} from {plan.t[start]:.3f} s and the "
+                    f"walk carries it {moved.max() * 1e3:.1f} mm along the plane meanwhile",
                 )
             ]
     return []
@@ -312,15 +324,14 @@ def ring_events(plan, settle: np.ndarray | None) -> list[PredictedEvent]:
     ]
 
 
-def strike_events(walk, stiffness: float) -> list[PredictedEvent]:
+def strike_events(walk, theta: np.ndarray) -> list[PredictedEvent]:
     """``strike`` where a swing-sole strike turns the stance foot past TIP_ANGLE (``strike``).
 
     Args:
         walk: The compliance-aware walk (``compliance.CompliantWalk``).
-        stiffness: The servo's kp [N m/rad].
+        theta: The stance foot's roll from the strike [rad], (n,) (``strike.strike_roll``).
     """
     plan = walk.plan
-    theta = strike_roll(plan, stiffness)
     return _first_past(
         plan.t,
         theta,
@@ -406,9 +417,10 @@ def predict(
             load's jumps on its spring (no feed-forward, ``servo_ring.settle_times``);
             None: no ``ring`` check.
 
-    The swing sole's prop uses the planned clearance: where the servos' sag puts the
-    reached walk's sole into the plane, that is ``strike``'s case, not a prop; the
-    planned sole's travel while it props decides ``swing_drag``.
+    The rocking's prop uses the planned clearance and the planned sole's travel; where
+    the servos' sag puts the reached walk's sole into the plane, that is ``strike``'s
+    case, and the reached sole's travel while it holds the robot up (``strike_roll`` > 0)
+    decides ``swing_drag`` too (the earlier of the two is the one reported).
     """
     made = plan if walk is None else walk.plan
     events = joint_limit_events(plan) + foot_slide_events(plan, contact_time)
@@ -417,7 +429,8 @@ def predict(
         made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness, props=props
     )
     slips, slide = slip_events(made, friction)
-    events += tips + swing_drag_events(plan, props) + slips + ring_events(plan, ring_settle)
+    events += tips + slips + ring_events(plan, ring_settle)
+    drags = swing_drag_events(plan, props)
     if walk is not None:
         if stiffness is None:
             raise SlopewalkError(
@@ -433,6 +446,9 @@ def predict(
                 )
             )
         else:
-            events += strike_events(walk, stiffness) + saturation_events(walk, force_limit)
+            theta = strike_roll(walk.plan, stiffness)
+            events += strike_events(walk, theta) + saturation_events(walk, force_limit)
+            drags += swing_drag_events(walk.plan, theta > 0, STRUCK)
+    events += sorted(drags, key=lambda e: e.time)[:1]
     events.sort(key=lambda e: (e.time, e.kind))
     return Prediction(verdict(events), events, rotation, slide)

@@ -12,9 +12,12 @@ from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES
 from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral
 from slopewalk.planner.verdict import (
     SLIP_DISTANCE,
+    STRUCK,
+    TIP_ANGLE,
     PredictedEvent,
     foot_slide_events,
     planned_slide,
@@ -132,6 +135,40 @@ def test_a_sagging_servo_strikes_the_plane(spec):
     fed = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, feedforward=plan.tau)
     held = predict(plan, friction=1.0, walk=fed, stiffness=spec.stiffness)
     assert "strike" not in [e.kind for e in held.events]
+
+
+def _struck(walk, depth):
+    """``walk`` with its swing sole ``depth`` [m] into the plane through single support
+    (carried along the plane as the walk carries it)."""
+    sole = walk.plan.swing_sole.copy()
+    sole[~walk.plan.double_support, 2] = -depth
+    return replace(walk, plan=replace(walk.plan, swing_sole=sole))
+
+
+def test_a_struck_swing_sole_that_props_the_robot_and_is_carried_on_is_swing_drag(spec, plan):
+    """A swing sole pressed into the plane past the leg's give at the strike's onset holds
+    the robot up (``strike_roll`` > 0, here short of the tip angle), and the walk carries it
+    along the plane: ``swing_drag``. Pressed in less (the leg gives it all) it props nothing;
+    pressed in as deep but standing still, it drags nothing."""
+    fed = compliant_walk(plan, stiffness=spec.stiffness, feedforward=plan.tau)
+    assert predict(plan, friction=1.0, walk=fed, stiffness=spec.stiffness).verdict == "stable"
+    depths = np.arange(1, 41) * 0.5e-3  # 0.5 ... 20 mm
+    rolls = [strike_roll(_struck(fed, d).plan, spec.stiffness).max() for d in depths]
+    giving = max(d for d, r in zip(depths, rolls, strict=True) if r == 0)  # 4.5 mm
+    lifting = giving + 2e-3  # the roll at most ~1 deg: no strike
+    assert 0 < strike_roll(_struck(fed, lifting).plan, spec.stiffness).max() < TIP_ANGLE / 4
+    struck = predict(plan, friction=1.0, walk=_struck(fed, lifting), stiffness=spec.stiffness)
+    assert struck.verdict == "swing_drag"
+    (drag,) = [e for e in struck.events if e.kind == "swing_drag"]
+    assert STRUCK in drag.cause
+    given = predict(plan, friction=1.0, walk=_struck(fed, giving), stiffness=spec.stiffness)
+    assert given.verdict == "stable"
+    still = _struck(fed, lifting)
+    ssp = ~still.plan.double_support
+    sole = still.plan.swing_sole.copy()
+    sole[ssp, :2] = sole[np.flatnonzero(ssp)[0], :2]  # the pressed sole kept in one place
+    still = replace(still, plan=replace(still.plan, swing_sole=sole))
+    assert predict(plan, friction=1.0, walk=still, stiffness=spec.stiffness).verdict == "stable"
 
 
 def test_a_walk_without_its_stiffness_is_refused(spec, plan):
