@@ -29,7 +29,8 @@ and ``batched_speedup``: the same search with pymoo's own mating rounds).
 ``mj_step`` capacity measured in the same run (``fraction_of_raw``); and what a
 10^6-trial grid costs before its first trial (``grid_1e6_count_s``: parse,
 check, count and take the first trial; ``grid_1e6_peak_MB``: Python memory
-allocated meanwhile), which was 134 s and 2.75 GB when grids were expanded.
+allocated meanwhile), which was 134 s and 2.75 GB when grids were expanded;
+and where one trial's CPU time goes (``trial_part_figures``).
 """
 
 from __future__ import annotations
@@ -463,6 +464,59 @@ def sweep_figures() -> dict:
     }
 
 
+def trial_part_figures() -> dict:
+    """Where a sweep trial's CPU time goes: the default sweep's trials one after the other
+    in this process, warm (after one trial), each part timed alone on its own
+    CPU clock (``time.process_time``): planning, MuJoCo's playback (the rollout and the
+    sensors' decoding), the analytic prediction (``predict_trial``: the servo loop's
+    walk, the compliance fixed point, the predicted events), and the whole trial as a
+    sweep runs it (``run_trial``, the prediction on a thread beside the playback).
+    Per trial, in ms; ``prediction_over_playback``: how much the analytic work costs
+    against the physics it predicts; ``trial_cpu_fraction_of_raw``: the trials' simulated
+    steps per CPU second of ``run_trial`` over raw ``mj_step``'s per CPU second, the
+    sweep's ``cpu_fraction_of_raw`` without the workers' start, the table and the report.
+    """
+    from slopewalk.bench.experiments.sweep.config import load_sweep
+    from slopewalk.bench.sim.playback import play
+    from slopewalk.bench.sim.prediction import predict_trial
+    from slopewalk.bench.sim.trial import run_trial
+
+    trials = list(load_sweep().trials)
+    first = trials[0]
+    run_trial(first.spec, first.trial_spec())  # warm: caches, scenes, the kernel
+    parts = {"plan": 0.0, "playback": 0.0, "prediction": 0.0, "trial": 0.0}
+    steps = 0
+
+    def timed(part, call):
+        start = time.process_time()
+        value = call()
+        parts[part] += time.process_time() - start
+        return value
+
+    for t in trials:
+        plan = timed("plan", lambda t=t: plan_walk(t.spec, t.gait()))
+        played = timed(
+            "playback", lambda t=t, p=plan: play(p, friction=t.friction, actuators=t.actuators)
+        )
+        steps += played.t.size
+        timed(
+            "prediction",
+            lambda t=t, p=plan: predict_trial(p, friction=t.friction, actuators=t.actuators),
+        )
+        timed("trial", lambda t=t: run_trial(t.spec, t.trial_spec()))
+    per = {part: 1e3 * cpu / len(trials) for part, cpu in parts.items()}
+    raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)
+    return {
+        "part_trials": len(trials),
+        "plan_cpu_ms": per["plan"],
+        "playback_cpu_ms": per["playback"],
+        "prediction_cpu_ms": per["prediction"],
+        "trial_cpu_ms": per["trial"],
+        "prediction_over_playback": per["prediction"] / per["playback"],
+        "trial_cpu_fraction_of_raw": steps / parts["trial"] / raw_cpu,
+    }
+
+
 def grid_figures() -> dict:
     """Cost of a 100 x 100 x 100 grid before its first trial (module doc)."""
     import tracemalloc
@@ -537,7 +591,7 @@ def run(what: str) -> dict:
         "planner": planner_figures,
         "sim": sim_figures,
         "ga": ga_figures,
-        "sweep": lambda: grid_figures() | sweep_figures(),
+        "sweep": lambda: grid_figures() | trial_part_figures() | sweep_figures(),
         "controller": controller_figures,
         "envelope": _envelope_figures,
     }[what]()
