@@ -487,23 +487,18 @@ def trial_part_figures() -> dict:
     parts = {"plan": 0.0, "playback": 0.0, "prediction": 0.0, "trial": 0.0}
     steps = 0
 
-    def timed(part, call):
+    def timed(part, fn, *args, **kwargs):
         start = time.process_time()
-        value = call()
+        value = fn(*args, **kwargs)
         parts[part] += time.process_time() - start
         return value
 
     for t in trials:
-        plan = timed("plan", lambda t=t: plan_walk(t.spec, t.gait()))
-        played = timed(
-            "playback", lambda t=t, p=plan: play(p, friction=t.friction, actuators=t.actuators)
-        )
-        steps += played.t.size
-        timed(
-            "prediction",
-            lambda t=t, p=plan: predict_trial(p, friction=t.friction, actuators=t.actuators),
-        )
-        timed("trial", lambda t=t: run_trial(t.spec, t.trial_spec()))
+        plan = timed("plan", plan_walk, t.spec, t.gait())
+        ground = {"friction": t.friction, "actuators": t.actuators}
+        steps += timed("playback", play, plan, **ground).t.size
+        timed("prediction", predict_trial, plan, **ground)
+        timed("trial", run_trial, t.spec, t.trial_spec())
     per = {part: 1e3 * cpu / len(trials) for part, cpu in parts.items()}
     raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)
     return {
