@@ -10,6 +10,19 @@ the analytic series, with the simulator's own thresholds (defined here, used by
 * ``tip``: the support's tilt (``tipping.foot_rotation``: the robot rocking on
   its support's edges, the rocking carried from one excursion to the next, on
   the simulator's soft floor) passes ``TIP_ANGLE``.
+  Or the servos' walk lands a swing sole tilted past ``TIP_ANGLE`` (``landing_events``:
+  the sole's tilt off the plane at the sample before each touch-down): the foot meets the
+  plane on an edge and is loaded there, the simulator's ``tip`` of that foot. The plan
+  lands every sole flat; servos that lag behind it (their output clipped at the torque
+  limit on fast steps) bring the sole down toe- or edge-first. Measured in MuJoCo on
+  fast (0.2–0.3 s) saturated ``servo_ff`` GA gaits: the landing foot is tilted 1.6–10°
+  at the planned touch-down, loaded past 5° within the first double support, and that
+  is the first ``tip``; the servos' walk lands it 0.4–6° tilted (about 1–4° less, so
+  this catches the larger tilts only). The walk re-roots at the new stance sole held
+  flat, so the rocking never sees that tilt. Designed on the design GA sets: ga-dev3
+  ``servo_ff`` 329 → 343 of 486 (14 verdicts from ``stable``, all failing in MuJoCo),
+  ga-dev2 ``servo_ff`` 663 → 662 of 684 (one walker landing 5.4° tilted); ``servo``,
+  ga-dev, the dense and paper grids and random-dev unchanged.
 * ``strike``: the swing sole of the walk actually made (compliance-aware) would
   go into the plane in single support; the plane props the robot up and turns
   the stance foot about its far edge (``strike.strike_roll``) past ``TIP_ANGLE``.
@@ -85,8 +98,8 @@ import numpy as np
 
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
-from slopewalk.planner.kinematics import GRAVITY
-from slopewalk.planner.servo_ring import RING_DECAYS, unsettled_landing
+from slopewalk.planner.kinematics import GRAVITY, Chain
+from slopewalk.planner.servo_ring import RING_DECAYS, landing_rows, unsettled_landing
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
@@ -324,6 +337,38 @@ def ring_events(plan, settle: np.ndarray | None) -> list[PredictedEvent]:
     ]
 
 
+def landing_tilt(walk_plan, rows: np.ndarray) -> np.ndarray:
+    """Tilt of the swing sole off the plane [rad] at samples ``rows`` of a walk, (k,): the
+    angle between its normal and the plane's (the chain's frame 9, ``Chain.poses``)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    q, sole, stance = walk_plan.q[rows], walk_plan.stance_sole[rows], walk_plan.stance[rows]
+    rotation, _ = Chain.from_spec(walk_plan.spec).poses(q, sole, stance)
+    return np.arccos(np.clip(rotation[9, 2, 2], -1.0, 1.0))
+
+
+def landing_events(walk_plan, rows: np.ndarray) -> list[PredictedEvent]:
+    """``tip`` at the first landing of the servos' walk whose swing sole meets the plane
+    tilted past TIP_ANGLE (module doc).
+
+    Args:
+        walk_plan: The walk the servos make (``servo_loop.servo_walk``'s ``plan``).
+        rows: The sample before each of its touch-downs (``servo_ring.landing_rows``).
+    """
+    tilt = landing_tilt(walk_plan, rows)
+    past = np.flatnonzero(tilt > TIP_ANGLE)
+    if not past.size:
+        return []
+    k = int(rows[past[0]])
+    return [
+        PredictedEvent(
+            float(walk_plan.t[k]),
+            "tip",
+            f"the lagging servos land the swing sole tilted {np.rad2deg(tilt[past[0]]):.1f} deg "
+            f"off the plane, loaded on its edge (tip angle {np.rad2deg(TIP_ANGLE):g} deg)",
+        )
+    ]
+
+
 def strike_events(walk, theta: np.ndarray) -> list[PredictedEvent]:
     """``strike`` where a swing-sole strike turns the stance foot past TIP_ANGLE (``strike``).
 
@@ -448,6 +493,7 @@ def predict(
         else:
             theta = strike_roll(walk.plan, stiffness)
             events += strike_events(walk, theta) + saturation_events(walk, force_limit)
+            events += landing_events(walk.plan, landing_rows(plan))
             drags += swing_drag_events(walk.plan, theta > 0, STRUCK)
     events += sorted(drags, key=lambda e: e.time)[:1]
     events.sort(key=lambda e: (e.time, e.kind))

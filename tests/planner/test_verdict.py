@@ -12,6 +12,7 @@ from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.joints import JOINT_NAMES
 from slopewalk.planner.plan import plan_walk
+from slopewalk.planner.servo_ring import landing_rows
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral
 from slopewalk.planner.verdict import (
@@ -20,6 +21,7 @@ from slopewalk.planner.verdict import (
     TIP_ANGLE,
     PredictedEvent,
     foot_slide_events,
+    landing_tilt,
     planned_slide,
     predict,
     saturation_events,
@@ -169,6 +171,38 @@ def test_a_struck_swing_sole_that_props_the_robot_and_is_carried_on_is_swing_dra
     sole[ssp, :2] = sole[np.flatnonzero(ssp)[0], :2]  # the pressed sole kept in one place
     still = replace(still, plan=replace(still.plan, swing_sole=sole))
     assert predict(plan, friction=1.0, walk=still, stiffness=spec.stiffness).verdict == "stable"
+
+
+def _landing_turned(walk, row, angle):
+    """``walk`` with its swing ankle's roll turned by ``angle`` [rad] at sample ``row``."""
+    q = walk.plan.q.copy()
+    q[row, JOINT_NAMES.index("swing_ankle_roll")] += angle
+    return replace(walk, plan=replace(walk.plan, q=q))
+
+
+def test_a_swing_sole_landing_tilted_past_the_tip_angle_is_a_tip(spec, plan):
+    """The plan lands each swing sole flat (its IK puts the sole on the plane), so its
+    landing tilt is 0. Turning the flat sole's ankle roll, whose axis then lies in the
+    plane, by δ tilts the sole by exactly δ. Landing tilted 6° (past the 5° tip angle) the
+    sole is loaded on its edge: ``tip`` at that landing; tilted 4°, nothing."""
+    fed = compliant_walk(plan, stiffness=spec.stiffness, feedforward=plan.tau)
+    rows = landing_rows(plan)
+    assert rows.size >= 2 and not plan.double_support[rows].any()
+    assert np.abs(landing_tilt(plan, rows)).max() < 1e-9
+    row = int(rows[1])
+    six = _landing_turned(fed, row, np.deg2rad(6.0))
+    assert np.rad2deg(landing_tilt(six.plan, [row])[0]) == pytest.approx(6.0, abs=1e-9)
+    tipped = predict(plan, friction=1.0, walk=six, stiffness=spec.stiffness)
+    assert tipped.verdict == "tip"
+    (tip,) = [e for e in tipped.events if e.kind == "tip"]
+    assert tip.time == pytest.approx(plan.t[row])
+    assert "swing sole tilted 6.0 deg" in tip.cause
+    four = _landing_turned(fed, row, np.deg2rad(-4.0))
+    assert predict(plan, friction=1.0, walk=four, stiffness=spec.stiffness).verdict == "stable"
+    # turned a sample after the landing (the sole already down): not a landing
+    late = _landing_turned(fed, row + 1, np.deg2rad(6.0))
+    assert "tip" not in [e.kind for e in predict(
+        plan, friction=1.0, walk=late, stiffness=spec.stiffness).events]  # fmt: skip
 
 
 def test_a_walk_without_its_stiffness_is_refused(spec, plan):
