@@ -65,6 +65,13 @@ def test_each_disagreement_gets_its_class():
     assert cause_class(over | {"simulated_verdict": "fall"}) != (
         "rocking past the tip angle in the prediction only"
     )
+    # a tip whose rocking stays under the tip angle is the landing's: the servos' walk
+    # landed the swing sole tilted past it (planner.verdict.landing_events)
+    landed = over | {"predicted_rotation_deg": 1.2, "simulated_max_tilt_deg": 4.2}
+    assert cause_class(landed) == "swing sole landed tilted in the prediction only"
+    assert cause_class(landed | {"predicted_rotation_deg": 5.1}) == (
+        "rocking past the tip angle in the prediction only"
+    )
 
 
 def test_the_goals_are_reported_where_the_table_has_their_cells():
@@ -124,8 +131,10 @@ def test_a_planned_foot_slide_the_robot_walks_through_has_its_class():
 
     slid = _row("stable", "foot_slide", "stable", simulated_max_tilt_deg=0.4)
     assert cause_class(slid) == "foot slide in the plan only"
-    # a predicted tip on a sole that hardly turned (0.4°) is no foot slide, and unexplained
-    assert cause_class(slid | {"predicted_verdict": "tip"}) == "unexplained"
+    # a predicted rocking tip on a sole that hardly turned (0.4°) is no foot slide, and
+    # unexplained
+    rocked = {"predicted_verdict": "tip", "predicted_rotation_deg": 6.0}
+    assert cause_class(slid | rocked) == "unexplained"
 
 
 def test_a_ring_the_robot_walks_through_has_its_class():
