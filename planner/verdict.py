@@ -355,18 +355,17 @@ def landing_events(walk_plan, rows: np.ndarray) -> list[PredictedEvent]:
         rows: The sample before each of its touch-downs (``servo_ring.landing_rows``).
     """
     tilt = landing_tilt(walk_plan, rows)
-    past = np.flatnonzero(tilt > TIP_ANGLE)
-    if not past.size:
-        return []
-    k = int(rows[past[0]])
-    return [
-        PredictedEvent(
-            float(walk_plan.t[k]),
-            "tip",
-            f"the lagging servos land the swing sole tilted {np.rad2deg(tilt[past[0]]):.1f} deg "
-            f"off the plane, loaded on its edge (tip angle {np.rad2deg(TIP_ANGLE):g} deg)",
-        )
-    ]
+    return _first_past(
+        walk_plan.t[rows],
+        tilt,
+        TIP_ANGLE,
+        "tip",
+        lambda: (
+            f"the lagging servos land the swing sole tilted "
+            f"{np.rad2deg(tilt[tilt > TIP_ANGLE][0]):.1f} deg off the plane, loaded on its "
+            f"edge (tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
+        ),
+    )
 
 
 def strike_events(walk, theta: np.ndarray) -> list[PredictedEvent]:
