@@ -10,24 +10,18 @@ the analytic series, with the simulator's own thresholds (defined here, used by
 * ``tip``: the support's tilt (``tipping.foot_rotation``: the robot rocking on
   its support's edges, the rocking carried from one excursion to the next, on
   the simulator's soft floor) passes ``TIP_ANGLE``.
-  Or the servos' walk lands a swing sole tilted past ``TIP_ANGLE`` (``landing_events``):
-  the foot meets the plane on an edge and is loaded there, the simulator's ``tip`` of that
-  foot. The plan lands every sole flat; servos that lag behind it (their output clipped at
-  the torque limit on fast steps) bring the sole down toe- or edge-first, and often
-  early: the sole lands where its first corner reaches the plane after the swing's apex
-  (``first_contacts``; the sample before the touch-down where none does), and it is on
-  the plane from there to the touch-down, tilted past the tip angle at any sample of that
-  stretch or not. Measured in MuJoCo on fast (0.2–0.3 s) saturated ``servo_ff`` GA gaits:
-  the landing foot is tilted 1.6–10° at the planned touch-down, loaded past 5° within the
-  first double support, and that is the first ``tip``; the servos' walk lands it 0.4–6°
-  tilted at the touch-down (about 1–4° less). The walk re-roots at the new stance sole
-  held flat, so the rocking never sees that tilt. Designed on the design GA sets: stop 40,
-  the touch-down's tilt, ga-dev3 ``servo_ff`` 329 → 343 of 486; stop 41, from the first
-  contact on, 343 → 371 (34 verdicts from ``stable``, 31 of them failing in MuJoCo). In
-  all 34 the lagging swing sole is still on the plane at its apex (66–111 ms, half the
-  single support, before the touch-down: the saturated knee and hip never lift it off)
-  and tilted there 5.0–8.0°, an edge dragged along the plane. ga-dev2 ``servo`` 590 →
-  589 of 684 (one walker, 5.0° at its apex); ``servo_ff`` of ga-dev2, ga-dev3 ``servo``,
+  Or the servos' walk lands a swing sole tilted past ``TIP_ANGLE`` (``landing_events``:
+  the sole's tilt off the plane at the sample before each touch-down): the foot meets the
+  plane on an edge and is loaded there, the simulator's ``tip`` of that foot. The plan
+  lands every sole flat; servos that lag behind it (their output clipped at the torque
+  limit on fast steps) bring the sole down toe- or edge-first. Measured in MuJoCo on
+  fast (0.2–0.3 s) saturated ``servo_ff`` GA gaits: the landing foot is tilted 1.6–10°
+  at the planned touch-down, loaded past 5° within the first double support, and that
+  is the first ``tip``; the servos' walk lands it 0.4–6° tilted (about 1–4° less, so
+  this catches the larger tilts only). The walk re-roots at the new stance sole held
+  flat, so the rocking never sees that tilt. Designed on the design GA sets: ga-dev3
+  ``servo_ff`` 329 → 343 of 486 (14 verdicts from ``stable``, all failing in MuJoCo),
+  ga-dev2 ``servo_ff`` 663 → 662 of 684 (one walker landing 5.4° tilted); ``servo``,
   ga-dev, the dense and paper grids and random-dev unchanged.
 * ``strike``: the swing sole of the walk actually made (compliance-aware) would
   go into the plane in single support; the plane props the robot up and turns
@@ -108,7 +102,6 @@ from slopewalk.planner.kinematics import GRAVITY, Chain
 from slopewalk.planner.servo_ring import RING_DECAYS, landing_rows, unsettled_landing
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
-from slopewalk.planner.trajectory import Timeline
 
 # ---- Thresholds shared with the simulator (bench/sim/events.py states their basis). ----
 SLIP_DISTANCE = 0.005  # [m]
@@ -353,84 +346,26 @@ def landing_tilt(walk_plan, rows: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(rotation[9, 2, 2], -1.0, 1.0))
 
 
-def lowest_corner(walk_plan, rows: np.ndarray) -> np.ndarray:
-    """Height over the plane of the swing sole's lowest corner [m] at samples ``rows`` of a
-    walk, (k,): the spec's sole outline (``sole.outline``, shifted to the swing foot's side)
-    carried by the chain's frame 9 (``Chain.poses``)."""
-    from slopewalk.planner.sole import outline
-
-    rows = np.asarray(rows, dtype=np.int64)
-    q, sole, stance = walk_plan.q[rows], walk_plan.stance_sole[rows], walk_plan.stance[rows]
-    rotation, origin = Chain.from_spec(walk_plan.spec).poses(q, sole, stance)
-    corners = np.asarray(outline(walk_plan.spec))  # (M, 2) about the sole's centre
-    across = corners[:, 1:] + walk_plan.spec.sole_shift(1 - stance)  # (M, k)
-    height = origin[9, 2] + rotation[9, 2, 0] * corners[:, :1] + rotation[9, 2, 1] * across
-    return height.min(axis=0)
-
-
-def first_contacts(walk_plan, rows: np.ndarray) -> np.ndarray:
-    """The sample at which each swing sole of a walk meets the plane, (N,): the first after
-    its swing's apex (mid single support, the peak of the lift spline) with a corner on or
-    under the plane (``lowest_corner``), else the sample before its touch-down.
-
-    Args:
-        walk_plan: The walk the servos make.
-        rows: The sample before each of its touch-downs (``servo_ring.landing_rows``), (N,).
-    """
-    rows = np.asarray(rows, dtype=np.int64)
-    timeline = Timeline.of(walk_plan.params)
-    step = np.arange(rows.size) + 1 - timeline.ssp_fraction / 2
-    apex = np.searchsorted(walk_plan.t, step * timeline.step_time)
-    windows = [np.arange(min(a, r), r) for a, r in zip(apex, rows, strict=True)]
-    low = lowest_corner(walk_plan, np.concatenate(windows)) if rows.size else np.empty(0)
-    contact, start = rows.copy(), 0
-    for k, window in enumerate(windows):
-        on = np.flatnonzero(low[start : start + window.size] <= 0.0)
-        if on.size:
-            contact[k] = window[on[0]]
-        start += window.size
-    return contact
-
-
 def landing_events(walk_plan, rows: np.ndarray) -> list[PredictedEvent]:
-    """``tip`` at the first landing of the servos' walk whose swing sole is on the plane
-    tilted past TIP_ANGLE (module doc): at a sample from its first contact
-    (``first_contacts``) to the sample before its touch-down.
+    """``tip`` at the first landing of the servos' walk whose swing sole meets the plane
+    tilted past TIP_ANGLE (module doc).
 
     Args:
         walk_plan: The walk the servos make (``servo_loop.servo_walk``'s ``plan``).
         rows: The sample before each of its touch-downs (``servo_ring.landing_rows``).
     """
-    rows = np.asarray(rows, dtype=np.int64)
-    contact = first_contacts(walk_plan, rows)
-    spans = [np.arange(c, r + 1) for c, r in zip(contact, rows, strict=True)]
-    on = landing_tilt(walk_plan, np.concatenate(spans)) if rows.size else np.empty(0)
-    # per landing: the first sample on the plane tilted past the tip angle, else its largest
-    tilt, when = np.empty(rows.size), rows.copy()
-    start = 0
-    for k, span in enumerate(spans):
-        part = on[start : start + span.size]
-        past = np.flatnonzero(part > TIP_ANGLE)
-        i = past[0] if past.size else int(np.argmax(part))
-        tilt[k], when[k] = part[i], span[i]
-        start += span.size
-
-    def cause() -> str:
-        k = int(np.flatnonzero(tilt > TIP_ANGLE)[0])
-        early = walk_plan.t[rows[k] + 1] - walk_plan.t[when[k]]
-        ahead = (
-            f", {early * 1e3:.0f} ms before the planned touch-down (on the plane since its "
-            f"first corner met it after the swing's apex)"
-            if early > 1.5e-3
-            else ""
-        )
-        return (
-            f"the lagging servos have the swing sole on the plane tilted "
-            f"{np.rad2deg(tilt[k]):.1f} deg off it{ahead}, loaded on its edge "
-            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
-        )
-
-    return _first_past(walk_plan.t[when], tilt, TIP_ANGLE, "tip", cause)
+    tilt = landing_tilt(walk_plan, rows)
+    return _first_past(
+        walk_plan.t[rows],
+        tilt,
+        TIP_ANGLE,
+        "tip",
+        lambda: (
+            f"the lagging servos land the swing sole tilted "
+            f"{np.rad2deg(tilt[tilt > TIP_ANGLE][0]):.1f} deg off the plane, loaded on its "
+            f"edge (tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
+        ),
+    )
 
 
 def strike_events(walk, theta: np.ndarray) -> list[PredictedEvent]:
