@@ -475,6 +475,13 @@ def trial_part_figures() -> dict:
     against the physics it predicts; ``trial_cpu_fraction_of_raw``: the trials' simulated
     steps per CPU second of ``run_trial`` over raw ``mj_step``'s per CPU second, the
     sweep's ``cpu_fraction_of_raw`` without the workers' start, the table and the report.
+    ``rollout_cpu_ms``: MuJoCo's rollout of each trial alone (``_rollout_alone``), the
+    physics of the walk itself; ``rollout_cpu_fraction_of_raw``: its steps per CPU second
+    over raw ``mj_step``'s, what a trial would keep with no other work at all (the walking
+    robot steps slower than the standing one the raw rate times, docs/benchmark.md).
+    The raw stepping of both fractions is paired with the trials: after each trial's
+    parts, as many raw steps as it simulated, so a machine whose speed drifts through
+    the run (the development VM's moves 2× within an hour) moves both sides alike.
     """
     from slopewalk.bench.experiments.sweep.config import load_sweep
     from slopewalk.bench.sim.playback import play
@@ -484,8 +491,8 @@ def trial_part_figures() -> dict:
     trials = list(load_sweep().trials)
     first = trials[0]
     run_trial(first.spec, first.trial_spec())  # warm: caches, scenes, the kernel
-    parts = {"plan": 0.0, "playback": 0.0, "prediction": 0.0, "trial": 0.0}
-    steps = 0
+    parts = {"plan": 0.0, "playback": 0.0, "rollout": 0.0, "prediction": 0.0, "trial": 0.0}
+    steps, raw_cpu_s = 0, 0.0
 
     def timed(part, fn, *args, **kwargs):
         start = time.process_time()
@@ -496,20 +503,52 @@ def trial_part_figures() -> dict:
     for t in trials:
         plan = timed("plan", plan_walk, t.spec, t.gait())
         ground = {"friction": t.friction, "actuators": t.actuators}
-        steps += timed("playback", play, plan, **ground).t.size
+        played = timed("playback", play, plan, **ground).t.size
+        parts["rollout"] += _rollout_alone(plan, **ground)
         timed("prediction", predict_trial, plan, **ground)
         timed("trial", run_trial, t.spec, t.trial_spec())
+        raw_cpu_s += played / raw_step_rate(played, 1, clock=time.process_time)
+        steps += played
     per = {part: 1e3 * cpu / len(trials) for part, cpu in parts.items()}
-    raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)
     return {
         "part_trials": len(trials),
         "plan_cpu_ms": per["plan"],
         "playback_cpu_ms": per["playback"],
+        "rollout_cpu_ms": per["rollout"],
         "prediction_cpu_ms": per["prediction"],
         "trial_cpu_ms": per["trial"],
         "prediction_over_playback": per["prediction"] / per["playback"],
-        "trial_cpu_fraction_of_raw": steps / parts["trial"] / raw_cpu,
+        "trial_cpu_fraction_of_raw": raw_cpu_s / parts["trial"],
+        "rollout_cpu_fraction_of_raw": raw_cpu_s / parts["rollout"],
     }
+
+
+def _rollout_alone(plan, *, friction: float, actuators: str) -> float:
+    """CPU time [s] of ``plan``'s MuJoCo rollout alone: ``play``'s scene, first state and
+    commands (``playback``'s own functions), one ``mujoco.rollout`` call on one thread, the
+    scene's compile and the sensors' decoding left out."""
+    import mujoco
+    from mujoco import rollout
+
+    from slopewalk.bench.sim.floor import SoftFloor
+    from slopewalk.bench.sim.model import servo_settings
+    from slopewalk.bench.sim.playback import (
+        HOLD_TIME,
+        SETTLE_TIME,
+        build_model,
+        commands_and_aim,
+        initial_state,
+    )
+
+    timestep = 0.001  # ``play``'s
+    model = build_model(plan, friction=friction, actuators=actuators, timestep=timestep)
+    servo = servo_settings(plan.spec, actuators)
+    floor = SoftFloor.of_scene(model)
+    _, commands, _ = commands_and_aim(plan, timestep, SETTLE_TIME, HOLD_TIME, servo, floor)
+    state, data = initial_state(model, plan), mujoco.MjData(model)
+    start = time.process_time()
+    rollout.rollout(model, data, state[None], commands[None])
+    return time.process_time() - start
 
 
 def grid_figures() -> dict:
