@@ -135,6 +135,16 @@ def _fixed_point_compiled(plan, rate_terms, stiffness):
     return delta, int(iterations), float(change)
 
 
+def torque_at_rest(plan: Plan) -> np.ndarray:
+    """Joint torques [N m], Table-I order, (8,), that hold the plan's first pose at rest
+    (q̇ = q̈ = 0) on its first stance sole with its first load split: what the robot
+    needs while it settles before the walk. The plan's own first torque ``plan.tau[0]``
+    adds the inertial torque of the walk's first acceleration (the splines start at
+    rest, so q̈(0) grows as 1/T² with the step time T)."""
+    q = plan.q[:1]
+    return _Dynamics(plan)._solve(q, np.zeros_like(q), np.zeros_like(q), slice(0, 1))[1][0]
+
+
 class _Dynamics:
     """The analytic pipeline of ``plan`` for other joint angles; stance sole and split fixed."""
 
@@ -146,14 +156,16 @@ class _Dynamics:
         # the plan's DSP share of the total wrench on the other foot (swing_force = share · total)
         self.share = np.where(ground_z != 0, plan.swing_force[:, 2] / ground_z, 0.0)[:, None]
 
-    def _solve(self, q, qd, qdd):
+    def _solve(self, q, qd, qdd, rows=slice(None)):
+        """Newton–Euler on the plan's samples ``rows`` (q, q̇, q̈ given on those rows)."""
         p = self.base
-        R, o = self.chain.poses(q, p.stance_sole, p.stance)
-        dyn = inverse_dynamics_poses(self.chain, R, o, qd, qdd, p.stance, self.gravity)
+        stance, stance_sole, share = p.stance[rows], p.stance_sole[rows], self.share[rows]
+        R, o = self.chain.poses(q, stance_sole, stance)
+        dyn = inverse_dynamics_poses(self.chain, R, o, qd, qdd, stance, self.gravity)
         swing_sole = o[9].T
-        swing_force = self.share * dyn.stance_force
-        swing_moment = self.share * (
-            dyn.stance_moment + cross(p.stance_sole - swing_sole, dyn.stance_force)
+        swing_force = share * dyn.stance_force
+        swing_moment = share * (
+            dyn.stance_moment + cross(stance_sole - swing_sole, dyn.stance_force)
         )
         tau = dyn.tau + swing_wrench_torques(self.chain, R, o, swing_force, swing_moment)
         return dyn, tau, swing_force, swing_sole

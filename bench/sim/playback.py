@@ -13,7 +13,8 @@ rows are computed in each step's forward pass, i.e. row k describes the state at
 the start of step k; that is the time base used here.
 
 Feedforward modes ("_ff") command more than the planned angles: the plan's torque
-over kp (``feedforward_torque``), and the soft floor's deflection under the planned
+over kp (``feedforward_torque``; while settling the first pose's torque at rest,
+``settle_feedforward``), and the soft floor's deflection under the planned
 loads (``floor_feedforward``, for the compiled scene's contact): the ankles turned
 against each sole's give (``floor.give_feedforward``), so the robot stays where the plan
 has it, and the legs shortened by the soles' sink (``touchdown``), so the swing sole
@@ -39,6 +40,7 @@ from slopewalk.bench.sim.contact import TrialSensors, add_trial_sensors, decode
 from slopewalk.bench.sim.floor import SoftFloor, foot_deflection, give_feedforward
 from slopewalk.bench.sim.model import SceneError, Servo, mujoco_message, scene_xml, servo_settings
 from slopewalk.bench.sim.touchdown import leg_offsets, leg_shortening
+from slopewalk.planner.compliance import torque_at_rest
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.kinematics import Chain, rotation_slope_to_world
 from slopewalk.planner.plan import Plan
@@ -140,8 +142,9 @@ def control_sequence(
     """Row times [s] (walk starts at 0) and commands, MJCF order, (m, 8).
 
     The command is the planned angle [rad], linearly interpolated to the rows; with a
-    feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``, held at its
-    first and last value while settling and holding), which adds τ_ff to the actuator's
+    feedforward ``servo`` it is shifted by τ_ff / kp (``feedforward_torque``; while
+    settling ``settle_feedforward``, the first pose's torque at rest; held at its last
+    value while holding), which adds τ_ff to the actuator's
     force (``model.Servo``), and, on a soft floor, by the floor's give and sink
     (``floor_feedforward``).
 
@@ -168,7 +171,9 @@ def commands_and_aim(
     q_ref = on_rows(t, plan, plan.q_left_right)
     aim = None
     if servo is not None and servo.feedforward:
-        q_ref += on_rows(t, plan, feedforward_torque(plan, servo)) / servo.kp
+        tau_ff = on_rows(t, plan, feedforward_torque(plan, servo))
+        tau_ff[: settle_rows(timestep, settle)] = settle_feedforward(plan, servo)
+        q_ref += tau_ff / servo.kp
         if floor is not None:
             aim = on_rows(t, plan, floor_feedforward(plan, floor))
             q_ref += aim
@@ -184,6 +189,11 @@ def floor_feedforward(plan: Plan, floor: SoftFloor, *, touchdown: bool = True) -
     if touchdown:
         out += leg_offsets(plan, leg_shortening(plan, sink))
     return out
+
+
+def settle_rows(timestep: float, settle: float) -> int:
+    """How many of ``_rows``' rows are the settle's (those before the walk's t = 0)."""
+    return int(round(settle / timestep))
 
 
 def _rows(plan: Plan, timestep: float, settle: float, hold: float) -> np.ndarray:
@@ -208,6 +218,16 @@ def feedforward_torque(plan: Plan, servo: Servo) -> np.ndarray:
     flips with the speed). The actuator's forcerange clips the loop's total again.
     """
     return stance_swing_to_left_right(feedforward_stance_swing(plan, servo), plan.stance)
+
+
+def settle_feedforward(plan: Plan, servo: Servo) -> np.ndarray:
+    """Torque the position loop is fed forward while the robot settles, MJCF order [N m],
+    (8,): the torque that holds the first pose at rest (``compliance.torque_at_rest``),
+    clipped to ±``servo.force_limit``. Not the walk's first τ_ff: that adds the
+    inertial torque and A q̈ of the walk's first acceleration, which grow as 1/T² with
+    the step time T and would lean the standing robot before its first step."""
+    tau = np.clip(torque_at_rest(plan), -servo.force_limit, servo.force_limit)
+    return stance_swing_to_left_right(tau[None], plan.stance[:1])[0]
 
 
 def feedforward_stance_swing(plan: Plan, servo: Servo) -> np.ndarray:

@@ -27,9 +27,11 @@ from slopewalk.bench.sim.playback import (
     loop_torque,
     on_rows,
     play_commands,
+    settle_rows,
 )
 from slopewalk.bench.sim.trial import TrialResult, compare
 from slopewalk.bench.sim.trial_spec import TrialSpec
+from slopewalk.planner.compliance import torque_at_rest
 from slopewalk.planner.joints import stance_swing_to_left_right
 from slopewalk.planner.plan import Plan
 
@@ -51,6 +53,14 @@ def lead_torque(plan: Plan, servo: Servo, terms: tuple[str, ...]) -> np.ndarray:
     torque whose static lag / kp they add to the command (in ``LOOP_TERMS``' order the
     sum is ``feedforward_torque``'s, unclipped)."""
     return stance_swing_to_left_right(loop_torque(plan, servo, terms), plan.stance)
+
+
+def lead_at_rest(plan: Plan, terms: tuple[str, ...]) -> np.ndarray:
+    """``lead_torque`` while the robot settles at the first pose, MJCF order [N m], (8,):
+    the torque at rest (``compliance.torque_at_rest``) if "torque" is in ``terms``; the
+    rotor's and the rate's terms are zero at rest (as ``playback.settle_feedforward``)."""
+    rest = torque_at_rest(plan) if "torque" in terms else np.zeros(plan.q.shape[1])
+    return stance_swing_to_left_right(rest[None], plan.stance[:1])[0]
 
 
 def friction_sign(qd: np.ndarray, *, held: bool) -> np.ndarray:
@@ -113,7 +123,9 @@ def simulate(
     if leads:
         if servo.feedforward:
             raise ValueError(f"leads {leads!r}: only for a mode without feedforward")
-        q_ref = q_ref + on_rows(t, plan, lead_torque(plan, servo, leads)) / servo.kp
+        lead = on_rows(t, plan, lead_torque(plan, servo, leads))
+        lead[: settle_rows(timestep, SETTLE_TIME)] = lead_at_rest(plan, leads)
+        q_ref = q_ref + lead / servo.kp
     if not joint_friction:
         model.dof_frictionloss[:] = 0.0
     if friction_ff is not None:
