@@ -84,7 +84,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from slopewalk.planner.compliance import CompliantWalk, _Dynamics
+from slopewalk.planner.compliance import CompliantWalk, _Dynamics, torque_at_rest
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.kinematics import Chain
 from slopewalk.planner.plan import Plan
@@ -226,12 +226,15 @@ def servo_walk(
     closed_chain: bool = True,
     compiled: bool = True,
     friction: float = np.inf,
+    settle_feedforward: np.ndarray | None = None,
 ) -> CompliantWalk:
     """The walk a servo loop makes, integrated through time (module doc).
 
     Args:
         plan: The planned walk (its ``q`` is the command); the walk starts at rest
-            in the static fixed point of its first sample.
+            in the static fixed point of its first pose, where the robot settled:
+            the loop holds the torque at rest (``compliance.torque_at_rest``), not
+            the walk's first torque (that adds the first acceleration's inertia).
         stiffness: kp [N m/rad], > 0.
         velocity_gain: kv [N m s/rad] (on the joint speed).
         damping: Joint damping d [N m s/rad].
@@ -245,6 +248,9 @@ def servo_walk(
             (``linearised``, ``support_jacobian``, ``_integrate``), the reference.
         friction: μ of the plane, > 0: how far along itself it holds a trailing sole
             (module doc); inf: without bound.
+        settle_feedforward: τ_ff fed into the loop while the robot settled [N m],
+            Table-I order, (8,); None: none without ``feedforward``, else the torque at
+            rest clipped to ±τ_max (``playback.settle_feedforward``'s).
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
@@ -271,9 +277,15 @@ def servo_walk(
     eye = np.eye(plan.q.shape[1])
     # what the joint needs beyond its own sway: τ_ref + A q̈_ref + d q̇_ref
     need = tau + armature * plan.qdd + damping * plan.qd
-    # start at rest in the static fixed point of the first sample (the robot has settled)
+    # start at rest in the static fixed point of the first pose (the robot has settled):
+    # kp δ0 + K_g δ0 = τ_ff(settle) − τ(rest)
+    rest = torque_at_rest(plan)
+    if settle_feedforward is None:
+        held = 0.0 if feedforward is None else np.clip(rest, -force_limit, force_limit)
+    else:
+        held = np.asarray(settle_feedforward, float)
     k0 = gravity_k[0] + stiffness * eye
-    f0 = -(need[0] + velocity_gain * plan.qd[0] - tau_ff[0])
+    f0 = -(rest - held)
     d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
     gains = tuple(
         float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit, friction)
