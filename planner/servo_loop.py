@@ -214,6 +214,47 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     return v, d + h * v, a, True
 
 
+def _loop_model(plan: Plan, both: np.ndarray, compiled: bool):
+    """τ_ref, M, K_g, C and the held rows of the second sole's Jacobian, (n, 4, dof), at
+    every sample of ``plan`` (``linearised``, ``support_jacobian``); the Jacobian is read
+    only where ``both`` (the second sole held), on the numpy path zeros elsewhere."""
+    if compiled:
+        tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
+        return tau, mass, gravity_k, velocity_c, np.ascontiguousarray(jac[:, HELD])
+    tau, mass, gravity_k, velocity_c = linearised(plan)
+    n, dof = plan.q.shape
+    jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
+    return tau, mass, gravity_k, velocity_c, jac
+
+
+def _settled_offset(
+    plan: Plan,
+    stiffness0: np.ndarray,
+    jac0: np.ndarray,
+    closed: bool,
+    settle_feedforward: np.ndarray | None,
+    force_limit: float | None,
+) -> np.ndarray:
+    """q_ref − q [rad] where the robot settled, at rest in the static fixed point of the
+    first pose: (kp + K_g) δ0 = τ_ff(settle) − τ(rest), the second sole held where
+    ``closed``.
+
+    ``stiffness0`` is kp + K_g at the first sample [N m/rad], (8, 8); ``jac0`` the held
+    rows of the second sole's Jacobian there. ``settle_feedforward`` None: the torque at
+    rest clipped to ±``force_limit`` [N m], or none where ``force_limit`` is None (a loop
+    without feedforward).
+    """
+    rest = torque_at_rest(plan)
+    if settle_feedforward is not None:
+        held = np.asarray(settle_feedforward, float)
+    else:
+        held = 0.0 if force_limit is None else np.clip(rest, -force_limit, force_limit)
+    f0 = -(rest - held)
+    if closed:
+        return _constrained(stiffness0, f0, jac0, np.zeros(len(HELD)))
+    return np.linalg.solve(stiffness0, f0)
+
+
 def servo_walk(
     plan: Plan,
     *,
@@ -265,28 +306,13 @@ def servo_walk(
     if not friction > 0:
         raise SlopewalkError(f"friction {friction!r}: must be > 0 (inf: no bound)")
     both = plan.double_support & closed_chain
-    if compiled:
-        tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
-        jac = np.ascontiguousarray(jac[:, HELD])
-    else:
-        tau, mass, gravity_k, velocity_c = linearised(plan)
-        # the held rows of the second sole's Jacobian, (n, 4, dof); read only where `both`
-        n, dof = plan.q.shape
-        jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
+    tau, mass, gravity_k, velocity_c, jac = _loop_model(plan, both, compiled)
     tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward, float)
-    eye = np.eye(plan.q.shape[1])
     # what the joint needs beyond its own sway: τ_ref + A q̈_ref + d q̇_ref
     need = tau + armature * plan.qdd + damping * plan.qd
-    # start at rest in the static fixed point of the first pose (the robot has settled):
-    # kp δ0 + K_g δ0 = τ_ff(settle) − τ(rest)
-    rest = torque_at_rest(plan)
-    if settle_feedforward is None:
-        held = 0.0 if feedforward is None else np.clip(rest, -force_limit, force_limit)
-    else:
-        held = np.asarray(settle_feedforward, float)
-    k0 = gravity_k[0] + stiffness * eye
-    f0 = -(rest - held)
-    d = _constrained(k0, f0, jac[0], np.zeros(len(HELD))) if both[0] else np.linalg.solve(k0, f0)
+    k0 = gravity_k[0] + stiffness * np.eye(plan.q.shape[1])
+    limit = None if feedforward is None else force_limit
+    d = _settled_offset(plan, k0, jac[0], both[0], settle_feedforward, limit)
     gains = tuple(
         float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit, friction)
     )
