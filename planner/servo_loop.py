@@ -248,7 +248,9 @@ def _settled_offset(
     if settle_feedforward is not None:
         held = np.asarray(settle_feedforward, float)
     else:
-        held = 0.0 if force_limit is None else np.clip(rest, -force_limit, force_limit)
+        held = (
+            np.zeros_like(rest) if force_limit is None else np.clip(rest, -force_limit, force_limit)
+        )
     f0 = -(rest - held)
     if closed:
         return _constrained(stiffness0, f0, jac0, np.zeros(len(HELD)))
