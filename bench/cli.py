@@ -13,6 +13,7 @@ quietly with status 141, as SIGPIPE stops a Unix filter (``_output_closed``).
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import select
 import signal
@@ -623,6 +624,22 @@ COMPILES = {
     "envelope": ("scores", *_TRIAL),
     "bands": ("scores", "plan"),
 }
+
+
+def command() -> None:
+    """The ``slopewalk`` console script (and ``python -m slopewalk``): ``main``, then exit.
+
+    The interpreter's last garbage collection at exit walks every object the command
+    made, numba's and LLVM's compiled kernel included: measured on the 2-core
+    development VM, a warm ``slopewalk plan`` ends 0.55–0.63 s after its work is done,
+    0.07–0.10 s with them frozen first (``gc.freeze``: the cyclic collector ignores
+    them from then on; atexit handlers and stream flushes run as before). Only for the
+    process's own command: ``main`` called in-process (the tests) leaves the collector
+    as it is.
+    """
+    code = main()
+    gc.freeze()
+    sys.exit(code)
 
 
 def main(argv: list[str] | None = None) -> int:

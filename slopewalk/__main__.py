@@ -1,8 +1,6 @@
 """``python -m slopewalk``: the ``slopewalk`` command."""
 
-import sys
-
-from slopewalk.bench.cli import main
+from slopewalk.bench.cli import command
 
 if __name__ == "__main__":
-    sys.exit(main())
+    command()

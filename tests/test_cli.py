@@ -332,3 +332,26 @@ def test_the_tilt_help_gives_the_nominal_number():
 
     text = build_parser()._subparsers._group_actions[0].choices["plan"].format_help()
     assert "(default 12, every robot's nominal gait)" in " ".join(text.split())
+
+
+def test_the_console_script_freezes_the_collector_then_exits_with_mains_status(monkeypatch):
+    """``command`` (the console script, ``python -m slopewalk``) freezes the cyclic
+    collector before the exit, whose last collection would walk the compiled kernel
+    (~0.5 s of every command, ``cli.command``), and exits with ``main``'s status."""
+    import gc
+    import tomllib
+
+    from slopewalk.bench import cli
+
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    assert scripts["slopewalk"] == "slopewalk.bench.cli:command"
+    monkeypatch.setattr(cli, "main", lambda: 3)
+    frozen = gc.get_freeze_count()
+    gc.collect()
+    try:
+        with pytest.raises(SystemExit) as exit_:
+            cli.command()
+        assert exit_.value.code == 3
+        assert gc.get_freeze_count() > frozen
+    finally:
+        gc.unfreeze()

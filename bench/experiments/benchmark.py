@@ -12,7 +12,8 @@ population in the same run, and ``speedup`` of the kernel over it. ``compile_s``
 the first plan and the first population score in a fresh process with an empty
 numba cache (a temporary ``NUMBA_CACHE_DIR``); ``cached_start_s``: the same first
 calls in a fresh process once that cache is filled; ``cached_process_s``: that
-whole process, interpreter and imports included; ``compile_<entry>_s`` each entry
+whole process, interpreter and imports included; ``warm_command_s``: a whole
+``slopewalk plan`` command then (``_warm_command_s``); ``compile_<entry>_s`` each entry
 point alone in an empty cache (``entry_compiles``).
 
 ``controller``: closed-loop steps/s (numpy controller through ``slopewalk.bench.sim.env``)
@@ -94,6 +95,23 @@ print(json.dumps({"import_s": imported - start, "first_calls_s": done - imported
 """
 
 
+def _warm_command_s(cache: str, runs: int = 3) -> float:
+    """Wall time [s] of a whole ``slopewalk plan`` command (``python -m slopewalk``, as
+    the console script runs it: start, imports, the cached kernel's load, the nominal
+    walk planned and written, the exit) in a fresh process once ``cache`` holds the
+    kernel; the median of ``runs``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    walls = []
+    with tempfile.TemporaryDirectory() as out:
+        command = [sys.executable, "-m", "slopewalk", "plan", "--step-time", "1"]
+        command += ["--out", os.path.join(out, "plan.npz")]
+        for _ in range(runs):
+            start = time.perf_counter()
+            subprocess.run(command, env=env, capture_output=True, check=True)
+            walls.append(time.perf_counter() - start)
+    return sorted(walls)[runs // 2]
+
+
 def _fresh_process(cache: str) -> tuple[dict, float]:
     """Run the first calls in a new interpreter with NUMBA_CACHE_DIR=cache; (figures, wall)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
@@ -173,6 +191,7 @@ def planner_figures() -> dict:
     with tempfile.TemporaryDirectory() as cache:
         cold, _ = _fresh_process(cache)
         warm, warm_wall = _fresh_process(cache)
+        command_s = _warm_command_s(cache)
     entries = entry_compiles()
     spec = load_spec()
     params = GaitParams.nominal(spec, NOMINAL_STEP_TIME)
@@ -214,6 +233,7 @@ def planner_figures() -> dict:
         "compile_sweep_s": entries["sweep"]["s"],
         "compile_sweep_cpu_s": entries["sweep"]["cpu_s"],
         "warm_trial_s": entries["trial"]["warm_s"],
+        "warm_command_s": command_s,
         "load_1min": os.getloadavg()[0],
     }
 
