@@ -210,10 +210,13 @@ def compiled(name: str) -> None:
         pass  # an unwritable cache: numba recompiles each time
 
 
-# a Ctrl-C ends an entry's process quietly (the command's own process says it was stopped)
+# a Ctrl-C ends an entry's process quietly (the command's own process says it was stopped);
+# the collector frozen before the exit, whose last collection walks all numba made: 0.74 s
+# of the command's wait after a plan's compile, 0.09 s frozen (``cli.command``'s reason)
 _RUN = (
     "import signal; signal.signal(signal.SIGINT, signal.SIG_DFL); "
-    "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r})"
+    "from slopewalk.planner.kernel.warm import compile_entry; compile_entry({!r}); "
+    "import gc; gc.freeze()"
 )
 
 
