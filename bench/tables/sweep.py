@@ -159,6 +159,8 @@ NOISE_COLUMNS = (*COLUMNS, "command_noise_deg")
 GAIT_COLUMNS = ("gait", "hip_height_m", "swing_lift_m", "tilt_deg", "pelvis_offset_m",
                 "step_length_m", "sway_share")  # fmt: skip
 GAIT_TABLE_COLUMNS = (*COLUMNS, *GAIT_COLUMNS)
+# A sweep of given gaits with command noise (envelope and command_noise): both, noise last
+GAIT_NOISE_COLUMNS = (*GAIT_TABLE_COLUMNS, "command_noise_deg")
 GAIT_DECIMALS = {"hip_height_m": 7, "swing_lift_m": 7, "tilt_deg": 5, "pelvis_offset_m": 7,
                  "step_length_m": 7, "sway_share": 7}  # fmt: skip
 _FIDELITY = COLUMNS.index("compliant_verdict")  # the columns before it are the older versions'
@@ -194,6 +196,7 @@ _LAYOUTS = {
     CONTROLLER_COLUMNS: "a sweep with a controller key",
     NOISE_COLUMNS: "a sweep with a command_noise key",
     GAIT_TABLE_COLUMNS: "a sweep with a draw or envelope key",
+    GAIT_NOISE_COLUMNS: "a sweep with an envelope and a command_noise key",
 }
 
 
@@ -203,7 +206,7 @@ def _sweep_layout(columns: tuple[str, ...]) -> TableFormat:
         for other, what in _LAYOUTS.items()
         if other != columns
     )
-    decimals = DECIMALS | GAIT_DECIMALS if columns == GAIT_TABLE_COLUMNS else DECIMALS
+    decimals = DECIMALS | GAIT_DECIMALS if set(GAIT_COLUMNS) <= set(columns) else DECIMALS
     return TableFormat("sweep", columns, decimals, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS, others)
 
 
@@ -211,12 +214,13 @@ SWEEP = _sweep_layout(COLUMNS)
 SWEEP_CONTROLLER = _sweep_layout(CONTROLLER_COLUMNS)
 SWEEP_NOISE = _sweep_layout(NOISE_COLUMNS)
 SWEEP_GAIT = _sweep_layout(GAIT_TABLE_COLUMNS)
+SWEEP_GAIT_NOISE = _sweep_layout(GAIT_NOISE_COLUMNS)
 
 
 def sweep_format(columns: tuple[str, ...] = COLUMNS) -> TableFormat:
     """The sweep's ``TableFormat`` of ``columns`` (``COLUMNS``, ``CONTROLLER_COLUMNS`` or
     ``NOISE_COLUMNS``)."""
-    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE, SWEEP_GAIT):
+    for fmt in (SWEEP, SWEEP_CONTROLLER, SWEEP_NOISE, SWEEP_GAIT, SWEEP_GAIT_NOISE):
         if tuple(columns) == fmt.columns:
             return fmt
     return TableFormat("sweep", tuple(columns), DECIMALS, _SWEEP_VERDICTS, PREVIOUS_LAYOUTS)

@@ -145,3 +145,28 @@ def test_the_committed_held_out_sets_hold_their_size():
     ci = load_sweep(sweeps / "ci.toml")
     assert len({t.gait() for t in ci.trials}) >= 40
     assert GAIT_TABLE_COLUMNS[-len(GAIT_COLUMNS) :] == GAIT_COLUMNS
+
+
+def test_an_envelope_sweep_with_command_noise_replays_each_gait_once_per_seed(tmp_path):
+    """``ga-noise.toml``: the envelope's gaits, each seed a replica with noise of its own,
+    in a table with the gait's columns and then the noise's."""
+    from slopewalk.bench.experiments.sweep.run import _open_loop_format
+
+    path, _ = _envelope(tmp_path, 1)
+    base = {"envelope": [path.name], "grid": {"actuators": ["servo"]}}
+    once = list(sweep_from_dict(base, base_dir=tmp_path).trials)
+    noisy = base | {"seed": [0, 1], "command_noise": 1e-4}
+    config = sweep_from_dict(noisy, base_dir=tmp_path)
+    trials = list(config.trials)
+    assert config.noisy and config.other_gaits and len(trials) == 2 * len(once) > 0
+    for plain in once:
+        replicas = [t for t in trials if t.gait() == plain.gait()]
+        assert sorted(t.seed for t in replicas) == [0, 1]
+        assert len({t.trial_id for t in replicas} | {plain.trial_id}) == 3
+        for t in replicas:
+            assert t.trial_spec().command_noise == pytest.approx(np.deg2rad(1e-4))
+    columns = _open_loop_format(config).columns
+    assert columns[-len(GAIT_COLUMNS) - 1 :] == (*GAIT_COLUMNS, "command_noise_deg")
+    row = run_one(trials[0])
+    assert not row["error"] and set(columns) <= set(row)
+    assert row["command_noise_deg"] == 1e-4 and row["gait"] == trials[0].gait_inputs()["gait"]

@@ -237,7 +237,7 @@ def sweep_from_dict(
             "robot's; run 'slopewalk envelope --model' for the model's own"
         )
     if "envelope" in data:
-        config = _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends)
+        config = _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends, noise)
         return replace(config, description=description, spec_ends=ends)
     if gaits != (None,) and (noise or singles):
         raise SweepError(
@@ -326,17 +326,17 @@ def _seeds(value, source: str) -> tuple[int, ...]:
     return tuple(values)
 
 
-def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends):
+def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends, noise=0.0):
     """The sweep of every gait the envelope tables of ``data["envelope"]`` played, in each
-    ``actuators`` mode of the one ``[grid]`` (module doc)."""
+    ``actuators`` mode of the one ``[grid]`` (module doc), with ``noise`` [deg] of command
+    noise (each seed a replica)."""
     paths = data["envelope"]
     if not isinstance(paths, list) or not paths or not all(isinstance(p, str) for p in paths):
         raise SweepError(f"{source}: envelope = {paths!r}: must be a non-empty list of paths")
-    extra = [k for k in ("draw", "command_noise") if k in data]
-    if singles or len(grids) != 1 or extra or set(grids[0][1]) - {"actuators"}:
+    if singles or len(grids) != 1 or "draw" in data or set(grids[0][1]) - {"actuators"}:
         raise SweepError(
             f"{source}: envelope goes with one [grid] of actuators alone (no other grid key, "
-            "[[trial]], draw or command_noise)"
+            "[[trial]] or draw)"
         )
     modes = grids[0][1].get("actuators", [DEFAULTS["actuators"]])
     robots: dict = {}  # specs by robot key, bodies by (robot, scale, ends) (``_bodies``)
@@ -346,8 +346,10 @@ def _envelope_sweep(data, grids, singles, base_dir, source, steps, seeds, ends):
             axes = cell | {"actuators": modes}
             axes |= {"mass_scale": [{}], "controller": [OPEN_LOOP]}
             where = f"{source}: {path} gait {k}"
-            boxes.append(_box(axes, steps, seeds, 0.0, robots, base_dir, where, (gait,), ends=ends))
-    return SweepConfig(source, steps, seeds, tuple(boxes))
+            boxes.append(
+                _box(axes, steps, seeds, noise, robots, base_dir, where, (gait,), ends=ends)
+            )
+    return SweepConfig(source, steps, seeds, tuple(boxes), command_noise_deg=noise)
 
 
 def _envelope_gaits(path: Path, source: str):

@@ -52,11 +52,12 @@ from slopewalk.bench.tables.sweep import (
     SWEEP,
     SWEEP_CONTROLLER,
     SWEEP_GAIT,
+    SWEEP_GAIT_NOISE,
     SWEEP_NOISE,
     outcome_columns,
     spec_end_format,
 )
-from slopewalk.bench.tables.table import model_format
+from slopewalk.bench.tables.table import TableFormat, model_format
 from slopewalk.planner import pace
 
 TABLE_NAME = "sweep.csv"
@@ -225,6 +226,14 @@ class SweepSummary:
 
 
 # long: to be split once the actuator-mode work in this module has landed (issue 20)
+def _open_loop_format(config: SweepConfig) -> TableFormat:
+    """The table layout of an open-loop sweep: its gaits' columns where it plays drawn or
+    given gaits, then the noise's where its commands get noise."""
+    if config.noisy:
+        return SWEEP_GAIT_NOISE if config.other_gaits else SWEEP_NOISE
+    return SWEEP_GAIT if config.other_gaits else SWEEP
+
+
 def run_sweep(
     config: SweepConfig,
     out_dir: str | Path,
@@ -297,11 +306,7 @@ def run_sweep(
         return f", about {duration(left / steps_per_s + report_s())} left"
 
     # a controller, command noise or other gaits add columns (tables/sweep.py), a model its own
-    fmt = (
-        SWEEP_CONTROLLER
-        if config.closed_loop
-        else (SWEEP_NOISE if config.noisy else (SWEEP_GAIT if config.other_gaits else SWEEP))
-    )
+    fmt = SWEEP_CONTROLLER if config.closed_loop else _open_loop_format(config)
     if config.spec_ends:
         fmt = spec_end_format(fmt)
     result = run_batch(
