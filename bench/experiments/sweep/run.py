@@ -225,7 +225,6 @@ class SweepSummary:
         return out + lost + list(self.lost_workers)
 
 
-# long: to be split once the actuator-mode work in this module has landed (issue 20)
 def _open_loop_format(config: SweepConfig) -> TableFormat:
     """The table layout of an open-loop sweep: its gaits' columns where it plays drawn or
     given gaits, then the noise's where its commands get noise."""
@@ -234,6 +233,7 @@ def _open_loop_format(config: SweepConfig) -> TableFormat:
     return SWEEP_GAIT if config.other_gaits else SWEEP
 
 
+# long: to be split once the actuator-mode work in this module has landed (issue 20)
 def run_sweep(
     config: SweepConfig,
     out_dir: str | Path,
