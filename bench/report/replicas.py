@@ -237,11 +237,13 @@ def spec_end_section(tables: dict[str, list[dict]], share) -> list[str]:
         *out,
         "",
         "End by end: the trials that walk in MuJoCo, those whose verdict (walks or not) "
-        "differs from the nominal spec's, and the predicted verdict's agreement, made on "
-        "the same moved spec.",
+        "differs from the nominal spec's (*moved*), those whose predicted verdict does "
+        "(*predicted moved*: the prediction's own sensitivity to that value), those both "
+        "move the same way (*alike*), and the predicted verdict's agreement, made on the "
+        "same moved spec.",
         "",
-        "| table | mode | spec | walk | moved | predicted agrees |",
-        "|---|---|---|---|---|---|",
+        "| table | mode | spec | walk | moved | predicted moved | alike | predicted agrees |",
+        "|---|---|---|---|---|---|---|---|",
         *by_end,
         "",
         "As a probability of walking: *p*, the share of the specs played (nominal and ends) "
@@ -290,16 +292,27 @@ def _calibration_row(name, mode, groups: list[dict[str, dict]]) -> str:
 
 def _end_rows(name, mode, groups: list[dict[str, dict]], ends: list[str], share) -> list[str]:
     """``spec_end_section``'s end-by-end rows of one table and mode (``groups``: each
-    trial's rows by spec end)."""
+    trial's rows by spec end): MuJoCo's walks, the trials the end moves in MuJoCo and in the
+    prediction (walks or not, against the same verdict on the nominal spec), those it moves
+    alike in both (the same way), and the predicted verdict's agreement there."""
     rows = []
     for end in [NOMINAL, *ends]:
         pairs = [(g[NOMINAL], g[end]) for g in groups if end in g]
         walk = sum(_walks(r["simulated_verdict"]) for _, r in pairs)
-        moved = sum(
-            _walks(n["simulated_verdict"]) != _walks(r["simulated_verdict"]) for n, r in pairs
-        )
+        shift = [(_shift(n, r, "simulated_verdict"), _shift(n, r, "predicted_verdict"))
+                 for n, r in pairs]  # fmt: skip
+        moved = sum(s != 0 for s, _ in shift)
+        predicted = sum(p != 0 for _, p in shift)
+        alike = sum(s != 0 and s == p for s, p in shift)
         ok = sum(_agrees(r, "predicted_verdict") for _, r in pairs)
         rows.append(
-            f"| {name} | {mode} | {end} | {walk}/{len(pairs)} | {moved} | {share(ok, len(pairs))} |"
+            f"| {name} | {mode} | {end} | {walk}/{len(pairs)} | {moved} | {predicted} | "
+            f"{alike} | {share(ok, len(pairs))} |"
         )
     return rows
+
+
+def _shift(nominal: dict, at_end: dict, column: str) -> int:
+    """+1 where ``column``'s verdict walks at the end and not on the nominal spec, −1 the
+    other way, 0 where the end does not move it."""
+    return int(_walks(at_end[column])) - int(_walks(nominal[column]))

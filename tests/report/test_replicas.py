@@ -125,9 +125,10 @@ def test_the_spec_end_section_counts_by_hand():
     assert row in lines
     # end by end: A alone walks at the nominal spec, the predicted verdict right on A and C;
     # at the high end A tips and B walks (both moved), the predicted verdict right on B, C
-    assert "| nom | servo | nominal | 1/4 | 0 | 2/4 |" in lines
-    assert f"| nom | servo | {LOW} | 1/4 | 0 | 3/4 |" in lines
-    assert f"| nom | servo | {HIGH} | 1/4 | 2 | 2/4 |" in lines
+    # (the low end moves the predicted verdict of B alone, to tip; the high end none)
+    assert "| nom | servo | nominal | 1/4 | 0 | 0 | 0 | 2/4 |" in lines
+    assert f"| nom | servo | {LOW} | 1/4 | 0 | 1 | 0 | 3/4 |" in lines
+    assert f"| nom | servo | {HIGH} | 1/4 | 2 | 0 | 0 | 2/4 |" in lines
     # as a probability: p (share of the 3 specs predicted stable) is 1, 2/3, 0, 1 for A-D,
     # MuJoCo's nominal walk 1, 0, 0, 0: Brier (0 + 4/9 + 0 + 1) / 4 = 13/36; the 0/1
     # predicted verdict misses B, D (0.5), the paper's (stable everywhere) B, C, D (0.75);
@@ -137,6 +138,18 @@ def test_the_spec_end_section_counts_by_hand():
         in lines
     )
     assert spec_end_section({"nom": NOMINAL_ROWS}, str) == []  # no ends anywhere
+
+
+def test_an_end_moves_the_prediction_alike_only_where_it_moves_mujoco_the_same_way():
+    from slopewalk.bench.report.replicas import spec_end_section
+
+    nominal = [_at(1.0, None, "stable", "stable"), _at(0.5, None, "fall", "tip"),
+               _at(0.4, None, "stable", "tip"), _at(0.3, None, "tip", "tip")]  # fmt: skip
+    # P stops walking in both, Q starts walking in both, R the opposite ways, S stays
+    ends = [_at(1.0, HIGH, "tip", "tip"), _at(0.5, HIGH, "stable", "stable"),
+            _at(0.4, HIGH, "fall", "stable"), _at(0.3, HIGH, "tip", "tip")]  # fmt: skip
+    lines = spec_end_section({"nom": nominal, "ends": ends}, lambda k, n: f"{k}/{n}")
+    assert f"| nom | servo | {HIGH} | 1/4 | 3 | 3 | 2 | 3/4 |" in lines
 
 
 def test_a_disagreement_says_when_the_spec_decides_its_trial():
