@@ -631,8 +631,8 @@ def command() -> None:
 
     The interpreter's last garbage collection at exit walks every object the command
     made, numba's and LLVM's compiled kernel included: measured on the 2-core
-    development VM, a warm ``slopewalk plan`` ends 0.55–0.63 s after its work is done,
-    0.07–0.10 s with them frozen first (``gc.freeze``: the cyclic collector ignores
+    development VM, a warm ``slopewalk plan`` ends 0.52–0.57 s after ``main`` returns,
+    0.05–0.06 s with them frozen first (``gc.freeze``: the cyclic collector ignores
     them from then on; atexit handlers and stream flushes run as before). Only for the
     process's own command: ``main`` called in-process (the tests) leaves the collector
     as it is.
