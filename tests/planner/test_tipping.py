@@ -7,8 +7,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from slopewalk.planner import tipping
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.kinematics import gravity_in_slope
+from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.tipping import (
     PITCH,
@@ -83,6 +84,32 @@ def test_line_inertia_is_edge_inertia_about_the_same_line(spec, axis):
     plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
     rows = np.arange(plan.t.size)
     assert plan.double_support.any() and set(plan.stance) == {0, 1}
+    for position in support_lines(plan, axis):
+        point = np.zeros((rows.size, 2))
+        point[:, axis] = position
+        direction = np.zeros((rows.size, 2))
+        direction[:, 1 - axis] = 1.0
+        want = edge_inertia(plan, rows, point, direction)
+        np.testing.assert_allclose(line_inertia(plan, axis, position), want, rtol=1e-12)
+
+
+@pytest.mark.parametrize("axis", [ROLL, PITCH])
+def test_line_inertia_takes_each_samples_own_stance_sides_inertia(spec, axis, monkeypatch):
+    """The paper's links have the same inertia tensor in their DH axes on either stance
+    leg, so a ``LinkMoments`` that took one side's for every sample would pass the test
+    above. Here the right stance's tensors are turned 30° about x (products of inertia
+    appear) and its CoM offsets moved: ``LinkMoments`` must still match ``edge_inertia``."""
+    chain = Chain.from_spec(spec)
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    turn = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    inertia, com = chain.inertia.copy(), chain.com.copy()
+    inertia[1] = turn @ inertia[1] @ turn.T
+    com[1] += [0.004, -0.003, 0.002]
+    lopsided = replace(chain, inertia=inertia, com=com)
+    monkeypatch.setattr(tipping.Chain, "from_spec", classmethod(lambda cls, spec: lopsided))
+    plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
+    rows = np.arange(plan.t.size)
+    assert set(plan.stance) == {0, 1}
     for position in support_lines(plan, axis):
         point = np.zeros((rows.size, 2))
         point[:, axis] = position
