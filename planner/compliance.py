@@ -59,6 +59,8 @@ class CompliantWalk:
         held: Where the loop through time (``servo_loop``) holds the second sole on the
             plane, (n,) bool: double support, and after lift-off while the plane still
             pushes it; None for the static fixed point.
+        open_deflection: q_ref − q [rad], (n, 8), of the same loop with the second sole
+            never held (``servo_loop.servo_walk``'s ``open_chain_too``); None if not asked.
     """
 
     plan: Plan
@@ -67,6 +69,7 @@ class CompliantWalk:
     converged: bool
     loop_torque: np.ndarray
     held: np.ndarray | None = None
+    open_deflection: np.ndarray | None = None
 
 
 def compliant_walk(

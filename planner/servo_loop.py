@@ -270,6 +270,7 @@ def servo_walk(
     compiled: bool = True,
     friction: float = np.inf,
     settle_feedforward: np.ndarray | None = None,
+    open_chain_too: bool = False,
 ) -> CompliantWalk:
     """The walk a servo loop makes, integrated through time (module doc).
 
@@ -294,6 +295,10 @@ def servo_walk(
         settle_feedforward: τ_ff fed into the loop while the robot settled [N m],
             Table-I order, (8,); None: none without ``feedforward``, else the torque at
             rest clipped to ±τ_max (``playback.settle_feedforward``'s).
+        open_chain_too: Also integrate the same loop with the second sole never held
+            (``closed_chain`` False) on the same linearisation, into the walk's
+            ``open_deflection``: where the joints would take the two soles apart in
+            double support (``verdict.double_support_tilt``).
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
@@ -312,28 +317,41 @@ def servo_walk(
     tau_ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward, float)
     # what the joint needs beyond its own sway: τ_ref + A q̈_ref + d q̇_ref
     need = tau + armature * plan.qdd + damping * plan.qd
-    k0 = gravity_k[0] + stiffness * np.eye(plan.q.shape[1])
-    limit = None if feedforward is None else force_limit
-    d = _settled_offset(plan, k0, jac[0], both[0], settle_feedforward, limit)
     gains = tuple(
         float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit, friction)
     )
-    dt = np.diff(plan.t, prepend=plan.t[0])
-    args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
-    solved = _integrate_compiled(*args, gains, d) if compiled else None
-    if solved is not None and solved[-1]:
-        delta, rate, accel, loop, held, finite = solved[:-1]
-    else:  # the reference, or a singular system met on the compiled path (kernel.servo)
-        jac = support_jacobian(plan)[:, HELD] if both.any() else jac
-        args = args[:-1] + (jac,)
-        delta, rate, accel, loop, held, finite = _integrate(*args, gains, d)
+    model = (mass, gravity_k, velocity_c, need, tau_ff, jac)
+    settle = (settle_feedforward, None if feedforward is None else force_limit)
+    delta, rate, accel, loop, held, finite = _loop(plan, model, both, gains, settle, compiled)
     dyn = _Dynamics(plan)
     walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel, compiled=compiled)
+    opened = None
+    if open_chain_too:
+        never = np.zeros_like(both)
+        opened = -_loop(plan, model, never, gains, settle, compiled)[0]
     if compiled:
         from slopewalk.planner.kernel import cache
 
         cache.compiled("predictors")
-    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held)
+    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held, opened)
+
+
+def _loop(plan: Plan, model: tuple, both: np.ndarray, gains: tuple, settle: tuple, compiled: bool):
+    """``_integrate``'s δ, δ̇, δ̈, request, held and finite for ``plan`` from where the robot
+    settled, the second sole held where ``both``; ``model``: (M, K_g, C, need, τ_ff, the
+    held rows of J) along the plan, ``settle``: (``settle_feedforward``, the limit it is
+    clipped to or None without feed-forward), ``gains`` as ``_integrate``'s."""
+    mass, gravity_k, velocity_c, need, tau_ff, jac = model
+    k0 = gravity_k[0] + gains[0] * np.eye(plan.q.shape[1])
+    d = _settled_offset(plan, k0, jac[0], both[0], *settle)
+    dt = np.diff(plan.t, prepend=plan.t[0])
+    args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
+    solved = _integrate_compiled(*args, gains, d) if compiled else None
+    if solved is not None and solved[-1]:
+        return solved[:-1]
+    # the reference, or a singular system met on the compiled path (kernel.servo)
+    jac = support_jacobian(plan)[:, HELD] if both.any() else jac
+    return _integrate(*args[:-1], jac, gains, d)
 
 
 def _linearised_compiled(plan: Plan, rows: np.ndarray | None = None):

@@ -23,6 +23,21 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   ``servo_ff`` 329 → 343 of 486 (14 verdicts from ``stable``, all failing in MuJoCo),
   ga-dev2 ``servo_ff`` 663 → 662 of 684 (one walker landing 5.4° tilted); ``servo``,
   ga-dev, the dense and paper grids and random-dev unchanged.
+  Or, through a double support, the servos' joints turn the two soles past ``TIP_ANGLE``
+  apart (``double_support_events``): after the touch-down the lagging joints go on
+  towards their commands, and the walk that holds the second sole flat (bilateral,
+  ``servo_loop``) turns that into ground moments a sole carrying a few newtons cannot
+  give; one sole stands on its edge. The tilt is the second sole's off the plane on the
+  same loop with no sole held (``servo_walk``'s ``open_chain_too``, the chain rooted at
+  the stance sole, flat), in double support only. Measured in MuJoCo
+  (``tests/sim/test_double_support_tilt.py``, a ga-dev3 ``servo_ff`` gait at 0.22 s):
+  its loaded soles tilt 6.8°, 9.9°, 10.1° in the double supports after the first three
+  landings, where the open chain turns them 4.5°, 6.2°, 7.3° apart (the landing tilt
+  itself stays under 2°). Designed on the design sets with the simulator's tip angle:
+  ga-dev3 ``servo_ff`` 379 → 398 of 486 (19 verdicts from ``stable``, all failing in
+  MuJoCo), ga-dev4 ``servo`` 137 → 140 of 167, ga-dev2 ``servo`` 584 → 581 and
+  ``servo_ff`` 662 → 661 of 684 (walkers whose soles the open chain turns 5.2–6.4°
+  apart); ga-dev, random-dev and the development grids unchanged.
 * ``strike``: the swing sole of the walk actually made (compliance-aware) would
   go into the plane in single support; the plane props the robot up and turns
   the stance foot about its far edge (``strike.strike_roll``) past ``TIP_ANGLE``.
@@ -341,9 +356,52 @@ def landing_tilt(walk_plan, rows: np.ndarray) -> np.ndarray:
     """Tilt of the swing sole off the plane [rad] at samples ``rows`` of a walk, (k,): the
     angle between its normal and the plane's (the chain's frame 9, ``Chain.poses``)."""
     rows = np.asarray(rows, dtype=np.int64)
-    q, sole, stance = walk_plan.q[rows], walk_plan.stance_sole[rows], walk_plan.stance[rows]
-    rotation, _ = Chain.from_spec(walk_plan.spec).poses(q, sole, stance)
+    return _sole_tilt(walk_plan, walk_plan.q[rows], rows)
+
+
+def double_support_tilt(plan, open_deflection: np.ndarray) -> np.ndarray:
+    """Angle between the two soles [rad], (n,), in double support (0 elsewhere), of the
+    walk the servo loop makes with the second sole never held (module doc, ``tip``).
+
+    Args:
+        plan: The planned walk (its ``q`` is the command).
+        open_deflection: q_ref − q of that loop [rad], (n, 8)
+            (``CompliantWalk.open_deflection``).
+
+    The chain is rooted at the stance sole, flat on the plane, so the second sole's tilt
+    off the plane (frame 9) is the angle between the two.
+    """
+    rows = np.flatnonzero(plan.double_support)
+    tilt = np.zeros(plan.t.size)
+    if rows.size:
+        tilt[rows] = _sole_tilt(plan, plan.q[rows] - open_deflection[rows], rows)
+    return tilt
+
+
+def _sole_tilt(plan, q: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Frame 9's tilt off the plane [rad] at joint angles ``q`` (k, 8) on ``plan``'s
+    stance soles at ``rows`` (k,)."""
+    chain = Chain.from_spec(plan.spec)
+    rotation, _ = chain.poses(q, plan.stance_sole[rows], plan.stance[rows])
     return np.arccos(np.clip(rotation[9, 2, 2], -1.0, 1.0))
+
+
+def double_support_events(plan, open_deflection: np.ndarray) -> list[PredictedEvent]:
+    """``tip`` at the first double-support sample where the servos' joints, the second
+    sole left free, turn the two soles more than TIP_ANGLE apart (``double_support_tilt``):
+    the plane cannot hold both flat, and one stands on its edge (module doc)."""
+    tilt = double_support_tilt(plan, open_deflection)
+    return _first_past(
+        plan.t,
+        tilt,
+        TIP_ANGLE,
+        "tip",
+        lambda: (
+            f"in double support the servos' joints turn the two soles "
+            f"{np.rad2deg(tilt.max()):.1f} deg apart: one stands on its edge "
+            f"(tip angle {np.rad2deg(TIP_ANGLE):g} deg)"
+        ),
+    )
 
 
 def landing_events(walk_plan, rows: np.ndarray) -> list[PredictedEvent]:
@@ -493,6 +551,8 @@ def predict(
             theta = strike_roll(walk.plan, stiffness)
             events += strike_events(walk, theta) + saturation_events(walk, force_limit)
             events += landing_events(walk.plan, landing_rows(plan))
+            if walk.open_deflection is not None:
+                events += double_support_events(plan, walk.open_deflection)
             drags += swing_drag_events(walk.plan, theta > 0, STRUCK)
     events += sorted(drags, key=lambda e: e.time)[:1]
     events.sort(key=lambda e: (e.time, e.kind))

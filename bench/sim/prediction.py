@@ -88,7 +88,9 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
     )
     walk = compliant_walk(plan, **loop)
-    loop_walk = servo_walk(plan, force_limit=servo.force_limit, friction=friction, **loop)
+    loop_walk = servo_walk(
+        plan, force_limit=servo.force_limit, friction=friction, open_chain_too=True, **loop
+    )
     floor_stiffness, contact_time = _floor_of(
         scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
     )

@@ -97,6 +97,19 @@ def test_double_support_holds_the_second_sole(spec, plan):
     assert held < 0.05 * loose
 
 
+def test_the_open_chain_beside_the_walk_is_the_loop_with_no_sole_held(spec, plan):
+    """``open_chain_too`` integrates the same loop on the same linearisation with the
+    second sole never held: its deflection is the ``closed_chain=False`` walk's, bit for
+    bit, and the walk itself is the one made without it."""
+    kw = dict(stiffness=spec.stiffness, armature=spec.armature, force_limit=1.5)
+    both = servo_walk(plan, open_chain_too=True, **kw)
+    np.testing.assert_array_equal(both.deflection, servo_walk(plan, **kw).deflection)
+    opened = servo_walk(plan, closed_chain=False, **kw).deflection
+    np.testing.assert_array_equal(both.open_deflection, opened)
+    assert np.abs(both.open_deflection - both.deflection)[plan.double_support].max() > 1e-3
+    assert servo_walk(plan, **kw).open_deflection is None
+
+
 @pytest.mark.parametrize(
     "kw",
     [

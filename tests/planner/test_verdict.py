@@ -20,6 +20,7 @@ from slopewalk.planner.verdict import (
     STRUCK,
     TIP_ANGLE,
     PredictedEvent,
+    double_support_tilt,
     foot_slide_events,
     landing_tilt,
     planned_slide,
@@ -203,6 +204,44 @@ def test_a_swing_sole_landing_tilted_past_the_tip_angle_is_a_tip(spec, plan):
     late = _landing_turned(fed, row + 1, np.deg2rad(6.0))
     assert "tip" not in [e.kind for e in predict(
         plan, friction=1.0, walk=late, stiffness=spec.stiffness).events]  # fmt: skip
+
+
+def _opened(walk, rows, joint, angle):
+    """``walk`` whose open chain (``open_deflection``) turns ``joint`` by ``angle`` [rad]
+    at samples ``rows`` and leaves every other joint on the plan."""
+    opened = np.zeros_like(walk.plan.q)
+    opened[rows, JOINT_NAMES.index(joint)] = -angle  # q = q_ref − deflection
+    return replace(walk, open_deflection=opened)
+
+
+def test_soles_turned_apart_in_double_support_past_the_tip_angle_are_a_tip(spec, plan):
+    """In double support the plan keeps both soles flat, so with the open chain on the
+    plan the soles are 0° apart. Turning the second sole's ankle roll, whose axis then
+    lies in the plane, by δ turns it δ off the plane: 6° (past the 5° tip angle) in the
+    second double support is ``tip`` at its first sample; 4°, or 6° in single support,
+    nothing (``double_support_tilt`` reads double support only)."""
+    fed = compliant_walk(plan, stiffness=spec.stiffness, feedforward=plan.tau)
+    both = np.flatnonzero(plan.double_support)
+    # flat to the arccos's resolution at 0: √(2 ε) ≈ 2e-8 rad per ulp of the cosine
+    assert np.abs(double_support_tilt(plan, np.zeros_like(plan.q))).max() < 1e-7
+    second = both[both > landing_rows(plan)[0]]
+    second = second[: np.argmax(np.diff(second) > 1) or second.size]  # one run
+    six = _opened(fed, second, "swing_ankle_roll", np.deg2rad(6.0))
+    tilt = double_support_tilt(plan, six.open_deflection)
+    np.testing.assert_allclose(np.rad2deg(tilt[second]), 6.0, atol=1e-9)
+    assert tilt[np.setdiff1d(np.arange(plan.t.size), second)].max() < 1e-7
+    tipped = predict(plan, friction=1.0, walk=six, stiffness=spec.stiffness)
+    assert tipped.verdict == "tip"
+    (tip,) = [e for e in tipped.events if e.kind == "tip"]
+    assert tip.time == pytest.approx(plan.t[second[0]])
+    assert "two soles 6.0 deg apart" in tip.cause
+    four = _opened(fed, second, "swing_ankle_roll", np.deg2rad(-4.0))
+    assert predict(plan, friction=1.0, walk=four, stiffness=spec.stiffness).verdict == "stable"
+    single = np.flatnonzero(~plan.double_support)
+    swinging = _opened(fed, single, "swing_ankle_roll", np.deg2rad(6.0))
+    assert predict(plan, friction=1.0, walk=swinging, stiffness=spec.stiffness).verdict == (
+        "stable"
+    )
 
 
 def test_a_walk_without_its_stiffness_is_refused(spec, plan):
