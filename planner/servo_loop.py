@@ -228,7 +228,7 @@ def _loop_model(plan: Plan, both: np.ndarray, compiled: bool):
 
 
 def _settled_offset(
-    plan: Plan,
+    rest: np.ndarray,
     stiffness0: np.ndarray,
     jac0: np.ndarray,
     closed: bool,
@@ -239,12 +239,12 @@ def _settled_offset(
     first pose: (kp + K_g) δ0 = τ_ff(settle) − τ(rest), the second sole held where
     ``closed``.
 
-    ``stiffness0`` is kp + K_g at the first sample [N m/rad], (8, 8); ``jac0`` the held
-    rows of the second sole's Jacobian there. ``settle_feedforward`` None: the torque at
-    rest clipped to ±``force_limit`` [N m], or none where ``force_limit`` is None (a loop
-    without feedforward).
+    ``rest`` is the torque that holds the first pose at rest [N m], (8,)
+    (``compliance.torque_at_rest``); ``stiffness0`` kp + K_g at the first sample
+    [N m/rad], (8, 8); ``jac0`` the held rows of the second sole's Jacobian there.
+    ``settle_feedforward`` None: the torque at rest clipped to ±``force_limit`` [N m], or
+    none where ``force_limit`` is None (a loop without feedforward).
     """
-    rest = torque_at_rest(plan)
     if settle_feedforward is not None:
         held = np.asarray(settle_feedforward, float)
     else:
@@ -321,7 +321,11 @@ def servo_walk(
         float(g) for g in (stiffness, velocity_gain, damping, armature, force_limit, friction)
     )
     model = (mass, gravity_k, velocity_c, need, tau_ff, jac)
-    settle = (settle_feedforward, None if feedforward is None else force_limit)
+    settle = (
+        torque_at_rest(plan),
+        settle_feedforward,
+        None if feedforward is None else force_limit,
+    )
     delta, rate, accel, loop, held, finite = _loop(plan, model, both, gains, settle, compiled)
     dyn = _Dynamics(plan)
     walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel, compiled=compiled)
@@ -339,11 +343,12 @@ def servo_walk(
 def _loop(plan: Plan, model: tuple, both: np.ndarray, gains: tuple, settle: tuple, compiled: bool):
     """``_integrate``'s δ, δ̇, δ̈, request, held and finite for ``plan`` from where the robot
     settled, the second sole held where ``both``; ``model``: (M, K_g, C, need, τ_ff, the
-    held rows of J) along the plan, ``settle``: (``settle_feedforward``, the limit it is
-    clipped to or None without feed-forward), ``gains`` as ``_integrate``'s."""
+    held rows of J) along the plan, ``settle``: (the torque at rest, ``settle_feedforward``,
+    the limit it is clipped to or None without feed-forward), ``gains`` as ``_integrate``'s."""
     mass, gravity_k, velocity_c, need, tau_ff, jac = model
     k0 = gravity_k[0] + gains[0] * np.eye(plan.q.shape[1])
-    d = _settled_offset(plan, k0, jac[0], both[0], *settle)
+    rest, settle_feedforward, limit = settle
+    d = _settled_offset(rest, k0, jac[0], both[0], settle_feedforward, limit)
     dt = np.diff(plan.t, prepend=plan.t[0])
     args = (mass, gravity_k, velocity_c, need, plan.qd, tau_ff, dt, plan.stance, both, jac)
     solved = _integrate_compiled(*args, gains, d) if compiled else None
