@@ -295,10 +295,9 @@ def servo_walk(
         settle_feedforward: τ_ff fed into the loop while the robot settled [N m],
             Table-I order, (8,); None: none without ``feedforward``, else the torque at
             rest clipped to ±τ_max (``playback.settle_feedforward``'s).
-        open_chain_too: Also integrate the same loop with the second sole never held
-            (``closed_chain`` False) on the same linearisation, into the walk's
-            ``open_deflection``: where the joints would take the two soles apart in
-            double support (``verdict.double_support_tilt``).
+        open_chain_too: Also integrate the loop with the second sole never held, on the
+            same linearisation, into ``open_deflection``: where the joints would take
+            the two soles apart in double support (``verdict.double_support_tilt``).
 
     Returns:
         A ``CompliantWalk``: the walk made (``plan``), q_ref − q, ``converged`` False
