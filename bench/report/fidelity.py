@@ -445,9 +445,11 @@ def cause_class(r) -> str:
       turns the support by more than a fifth of the tip angle (it is there, only
       smaller than the simulator's): a landing's impact turning pitch into roll, which
       the two-axis rocking keeps apart (results/README.md);
-    * swing sole landed tilted in the prediction only: predicted tip with the support's
-      rocking short of the tip angle, so the tip is the servos' walk landing its swing
-      sole tilted past it (``planner.verdict.landing_events``), yet the robot walked;
+    * a sole on its edge in the prediction only: predicted tip with the support's
+      rocking short of the tip angle, so the tip is a sole the servos stand on its edge:
+      their walk landing the swing sole tilted past the tip angle
+      (``planner.verdict.landing_events``), or their open chain turning the two soles
+      past it in double support (``double_support_events``), yet the robot walked;
     * rocking past the tip angle in the prediction only: predicted tip, yet the robot
       walked, its loaded foot tilting by more than a fifth of the tip angle (measured,
       ``simulated_max_tilt_deg``): the support rocked in MuJoCo as predicted, less far;
@@ -472,7 +474,7 @@ def cause_class(r) -> str:
         return "rocking short of the tip angle"
     tipped = r["predicted_verdict"] == "tip" and _walks(r["simulated_verdict"])
     if tipped and not r["predicted_rotation_deg"] > np.rad2deg(TIP_ANGLE):
-        return "swing sole landed tilted in the prediction only"
+        return "a sole on its edge in the prediction only"
     if tipped and r["simulated_max_tilt_deg"] > rocked:
         return "rocking past the tip angle in the prediction only"
     if r["predicted_verdict"] == "foot_slide" and _walks(r["simulated_verdict"]):

@@ -65,10 +65,11 @@ def test_each_disagreement_gets_its_class():
     assert cause_class(over | {"simulated_verdict": "fall"}) != (
         "rocking past the tip angle in the prediction only"
     )
-    # a tip whose rocking stays under the tip angle is the landing's: the servos' walk
-    # landed the swing sole tilted past it (planner.verdict.landing_events)
+    # a tip whose rocking stays under the tip angle is a sole the servos stand on its
+    # edge: landed tilted past it, or turned past it from the other in double support
+    # (planner.verdict.landing_events, double_support_events)
     landed = over | {"predicted_rotation_deg": 1.2, "simulated_max_tilt_deg": 4.2}
-    assert cause_class(landed) == "swing sole landed tilted in the prediction only"
+    assert cause_class(landed) == "a sole on its edge in the prediction only"
     assert cause_class(landed | {"predicted_rotation_deg": 5.1}) == (
         "rocking past the tip angle in the prediction only"
     )
