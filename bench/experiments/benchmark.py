@@ -463,6 +463,7 @@ def sweep_figures() -> dict:
         cpu = cpu_s() - start_cpu
     raw = (before + capacity()) / 2  # before and after the sweep: drifting load averages out
     raw_cpu = raw_step_rate(40_000, 1, clock=time.process_time)
+    start_s = _worker_start_s()
     rate = summary.sim_steps / wall
     return {
         "trials": summary.total,
@@ -474,6 +475,9 @@ def sweep_figures() -> dict:
         "sim_steps_per_s": rate,
         "raw_steps_per_s": raw,
         "fraction_of_raw": rate / raw,
+        "worker_start_s": start_s,
+        "start_share": start_s / wall,
+        "fraction_of_raw_after_start": summary.sim_steps / (wall - start_s) / raw,
         "cpu_s": cpu,
         "raw_steps_per_cpu_s": raw_cpu,
         "cpu_fraction_of_raw": summary.sim_steps / cpu / raw_cpu,
@@ -482,6 +486,26 @@ def sweep_figures() -> dict:
         "wall_over_estimate": wall / estimate,
         "cpu_over_estimate": cpu / workers / estimate,
     }
+
+
+def _worker_start_s(runs: int = 3) -> float:
+    """Wall time [s] before a sweep's first worker can start, measured alone: a fresh
+    interpreter importing what the sweep's fork server imports (``executor``'s
+    ``SERVER_PRELOAD``, the trial job's module, ``KERNEL_PRELOAD``: the compiled entries
+    loaded from numba's cache) and exiting; the median of ``runs``. No worker forks
+    before the server has imported these, so every sweep pays this much wall time on top
+    of its trials however many cores it has."""
+    from slopewalk.bench.batch.executor import KERNEL_PRELOAD, SERVER_PRELOAD
+    from slopewalk.bench.experiments.sweep.run import SWEEP_BATCH
+
+    modules = (SERVER_PRELOAD, SWEEP_BATCH.fn.__module__, KERNEL_PRELOAD)
+    command = [sys.executable, "-c", "; ".join(f"import {m}" for m in modules)]
+    walls = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        subprocess.run(command, capture_output=True, check=True)
+        walls.append(time.perf_counter() - start)
+    return sorted(walls)[runs // 2]
 
 
 def trial_part_figures() -> dict:
