@@ -101,14 +101,19 @@ def _warm_command_s(cache: str, runs: int = 3) -> float:
     walk planned and written, the exit) in a fresh process once ``cache`` holds the
     kernel; the median of ``runs``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-    walls = []
     with tempfile.TemporaryDirectory() as out:
         command = [sys.executable, "-m", "slopewalk", "plan", "--step-time", "1"]
         command += ["--out", os.path.join(out, "plan.npz")]
-        for _ in range(runs):
-            start = time.perf_counter()
-            subprocess.run(command, env=env, capture_output=True, check=True)
-            walls.append(time.perf_counter() - start)
+        return _median_run_s(command, runs, env)
+
+
+def _median_run_s(command: list[str], runs: int, env: dict | None = None) -> float:
+    """Median wall time [s] of ``runs`` runs of ``command`` in a fresh process each."""
+    walls = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        subprocess.run(command, env=env, capture_output=True, check=True)
+        walls.append(time.perf_counter() - start)
     return sorted(walls)[runs // 2]
 
 
@@ -499,13 +504,7 @@ def _worker_start_s(runs: int = 3) -> float:
     from slopewalk.bench.experiments.sweep.run import SWEEP_BATCH
 
     modules = (SERVER_PRELOAD, SWEEP_BATCH.fn.__module__, KERNEL_PRELOAD)
-    command = [sys.executable, "-c", "; ".join(f"import {m}" for m in modules)]
-    walls = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        subprocess.run(command, capture_output=True, check=True)
-        walls.append(time.perf_counter() - start)
-    return sorted(walls)[runs // 2]
+    return _median_run_s([sys.executable, "-c", "; ".join(f"import {m}" for m in modules)], runs)
 
 
 def trial_part_figures() -> dict:
