@@ -87,6 +87,7 @@ import numpy as np
 from slopewalk.planner.compliance import CompliantWalk, _Dynamics, torque_at_rest
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.kinematics import Chain
+from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 
 STEP = 1e-6  # [rad, rad/s]: central-difference step for K_g and C (τ is smooth in q, q̇)
@@ -219,8 +220,7 @@ def _loop_model(plan: Plan, both: np.ndarray, compiled: bool):
     every sample of ``plan`` (``linearised``, ``support_jacobian``); the Jacobian is read
     only where ``both`` (the second sole held), on the numpy path zeros elsewhere."""
     if compiled:
-        tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
-        return tau, mass, gravity_k, velocity_c, np.ascontiguousarray(jac[:, HELD])
+        return _plan_linearisation(plan)
     tau, mass, gravity_k, velocity_c = linearised(plan)
     n, dof = plan.q.shape
     jac = support_jacobian(plan)[:, HELD] if both.any() else np.zeros((n, len(HELD), dof))
@@ -356,6 +356,15 @@ def _loop(plan: Plan, model: tuple, both: np.ndarray, gains: tuple, settle: tupl
     # the reference, or a singular system met on the compiled path (kernel.servo)
     jac = support_jacobian(plan)[:, HELD] if both.any() else jac
     return _integrate(*args[:-1], jac, gains, d)
+
+
+@once_per_plan
+def _plan_linearisation(plan: Plan):
+    """``_loop_model``'s compiled τ_ref, M, K_g, C and held Jacobian rows at every sample of
+    ``plan``; worked out once per plan object (``per_plan``: a sweep's trials of one plan
+    at several frictions or actuator modes share it, none of them writes into it)."""
+    tau, mass, gravity_k, velocity_c, jac = _linearised_compiled(plan)
+    return tau, mass, gravity_k, velocity_c, np.ascontiguousarray(jac[:, HELD])
 
 
 def _linearised_compiled(plan: Plan, rows: np.ndarray | None = None):

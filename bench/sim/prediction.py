@@ -34,9 +34,10 @@ import mujoco
 import numpy as np
 
 from slopewalk.bench.sim.floor import SoftFloor, scene_corner_stiffness
-from slopewalk.bench.sim.model import scene_xml, servo_settings
+from slopewalk.bench.sim.model import Servo, scene_xml, servo_settings
 from slopewalk.bench.sim.playback import feedforward_stance_swing
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
+from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import linearised_at, servo_walk
 from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
@@ -80,14 +81,8 @@ class _Loop(TypedDict):
 def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPrediction:
     """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ."""
     servo = servo_settings(plan.spec, actuators)
-    loop = _Loop(
-        stiffness=servo.kp,
-        velocity_gain=servo.kv,
-        damping=servo.damping,
-        armature=servo.armature,
-        feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
-    )
-    walk = compliant_walk(plan, **loop)
+    loop = _loop_of(plan, servo)
+    walk = _compliant_of(plan, servo)
     loop_walk = servo_walk(
         plan, force_limit=servo.force_limit, friction=friction, open_chain_too=True, **loop
     )
@@ -111,6 +106,26 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
         prediction=prediction,
         loop_walk=loop_walk,
     )
+
+
+@once_per_plan
+def _loop_of(plan: Plan, servo: Servo) -> _Loop:
+    """The loop's settings for ``plan`` played by ``servo``, its feed-forward included;
+    once per plan object and servo (``planner/per_plan.py``: a sweep's trials of one plan
+    at several frictions share it)."""
+    return _Loop(
+        stiffness=servo.kp,
+        velocity_gain=servo.kv,
+        damping=servo.damping,
+        armature=servo.armature,
+        feedforward=feedforward_stance_swing(plan, servo) if servo.feedforward else None,
+    )
+
+
+@once_per_plan
+def _compliant_of(plan: Plan, servo: Servo) -> CompliantWalk:
+    """``compliant_walk`` of ``plan`` under ``servo``'s loop, once per plan object and servo."""
+    return compliant_walk(plan, **_loop_of(plan, servo))
 
 
 class PredictionBeside:
@@ -139,11 +154,12 @@ class PredictionBeside:
         return self._future.result()
 
 
-def _ring_settle(plan: Plan, servo) -> np.ndarray | None:
+@once_per_plan
+def _ring_settle(plan: Plan, servo: Servo) -> np.ndarray | None:
     """The loop's ring settling time [s] at each touch-down of ``plan`` where it takes the
     load's jumps on its spring (no feed-forward; ``planner/servo_ring.py``), from the
     spec's A, d + kv and kp on the chain's M and K_g before each landing; else None: no
-    ``ring`` check."""
+    ``ring`` check. Once per plan object and servo."""
     if servo.feedforward:
         return None
     loop = RingLoop(servo.armature, servo.damping + servo.kv, servo.kp)

@@ -1,0 +1,34 @@
+"""Trials of one plan share its per-plan work (``planner/per_plan.py``) and predict what
+trials on fresh plans predict: nothing a trial does changes what the next one reads."""
+
+import numpy as np
+import pytest
+
+from slopewalk.bench.sim.prediction import predict_trial
+from slopewalk.planner.gait import GaitParams
+from slopewalk.planner.plan import plan_walk
+
+
+def _same(a, b) -> None:
+    assert a.verdict == b.verdict
+    assert [(e.time, e.kind, e.cause) for e in a.prediction.events] == [
+        (e.time, e.kind, e.cause) for e in b.prediction.events
+    ]
+    np.testing.assert_array_equal(a.prediction.rotation, b.prediction.rotation)
+    for walk in ("walk", "loop_walk"):
+        x, y = getattr(a, walk), getattr(b, walk)
+        np.testing.assert_array_equal(x.plan.q, y.plan.q)
+        np.testing.assert_array_equal(x.plan.zmp, y.plan.zmp)
+        np.testing.assert_array_equal(x.deflection, y.deflection)
+
+
+@pytest.mark.parametrize("actuators", ["servo", "servo_ff"])
+def test_trials_on_one_plan_object_predict_as_trials_on_fresh_plans(spec, actuators):
+    """0.75 s on 10°: the soft loop lags and saturates, so every part of the prediction has
+    work to do; the shared plan is played at μ 1 first, then at μ 0.4."""
+    gait = GaitParams.nominal(spec, 0.75, slope=np.deg2rad(10.0), steps=2)
+    shared = plan_walk(spec, gait)
+    for friction in (1.0, 0.4, 1.0):
+        got = predict_trial(shared, friction=friction, actuators=actuators)
+        fresh = predict_trial(plan_walk(spec, gait), friction=friction, actuators=actuators)
+        _same(got, fresh)
