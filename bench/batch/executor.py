@@ -18,7 +18,9 @@ Two ways to run them:
   worker starts without the ~1.3 s of imports a spawned one pays each time, and
   ``start_server`` lets a command start it before its own imports, so the two import
   side by side. Each
-  worker is given one job at a time over its own pipe, so when a worker dies
+  worker is given one job at a time over its own pipe (jobs that share work a worker
+  keeps, a sweep's trials of one plan, go to one worker in a row: ``run``'s ``group``),
+  so when a worker dies
   (a segfault in a native library, ``os._exit``, the OOM killer, ``kill -9``)
   the pool knows which job it held: that job comes back as a ``Lost`` with the
   cause ("worker died: signal 9 (SIGKILL)"), a fresh worker takes its place and
@@ -74,6 +76,7 @@ PARENT_POLL_S = 0.5  # [s] how often a worker checks that its parent lives (fall
 WAIT_S = 0.5  # [s] longest wait of the main loop before it looks again
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 CLEAN_EXIT_S = 2.0  # [s] how long a pool left normally waits for its idle workers to exit
+LOOKAHEAD = 64  # jobs a grouped run looks through for a worker's own group (``LocalPool.run``)
 MAX_FAILED_STARTS = 3  # workers in a row that die before they are ready: the pool gives up
 
 
@@ -302,6 +305,7 @@ class _Worker:
         theirs.close()
         self.ready = False
         self.job: tuple[str, tuple] | None = None
+        self.group: object = None  # its last job's group (``LocalPool.run``)
 
     def stop(self) -> None:
         with contextlib.suppress(Exception):
@@ -362,8 +366,15 @@ class LocalPool:
             worker.stop()
         self._pool = []
 
-    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str, object]]:
+    def run(
+        self, jobs: Iterable[tuple[str, tuple]], group: Callable | None = None
+    ) -> Iterator[tuple[str, object]]:
         """Run ``jobs`` (key, args) pairs; yield (key, result or ``Lost``) as each ends.
+
+        ``group``: of a job's args, a hashable saying which jobs share work a worker keeps
+        (a sweep's: the trials of one plan). A worker is then given, from the next
+        ``LOOKAHEAD`` jobs, one of its last job's group first (``_pick``), so the
+        group's jobs run in a row on one worker; None: the jobs in their order.
 
         Raises:
             ExecutorError: ``MAX_FAILED_STARTS`` workers in a row died before they
@@ -374,6 +385,7 @@ class LocalPool:
         if first is None:
             return
         jobs = itertools.chain([first], jobs)
+        ahead: list[tuple[str, tuple]] = []  # the next jobs, when grouped
         retry: list[tuple[str, tuple]] = []  # jobs not delivered to a worker that had died
         more = True
         for _ in range(self.workers):
@@ -381,7 +393,7 @@ class LocalPool:
         while True:
             for worker in self._pool:  # feed every ready, idle worker
                 if more and worker.ready and worker.job is None:
-                    job = retry.pop() if retry else next(jobs, None)
+                    job = retry.pop() if retry else self._next(worker, jobs, ahead, group)
                     if job is None:
                         more = False
                         break
@@ -403,6 +415,18 @@ class LocalPool:
                         self._start(i)
                     if outcome is not None:
                         yield outcome
+
+    def _next(self, worker: _Worker, jobs: Iterator, ahead: list, group: Callable | None):
+        """The next job for ``worker`` (``run``), or None when there is none left."""
+        if group is None:
+            return next(jobs, None)
+        ahead.extend(itertools.islice(jobs, LOOKAHEAD - len(ahead)))
+        if not ahead:
+            return None
+        others = {w.group for w in self._pool if w is not worker and w.job is not None}
+        job = ahead.pop(_pick([group(*args) for _, args in ahead], worker.group, others))
+        worker.group = group(*job[1])
+        return job
 
     def _start(self, i: int) -> None:
         """A new worker in place ``i`` of the pool (appended at the end).
@@ -447,6 +471,19 @@ class LocalPool:
         return (key, Lost(cause)), True
 
 
+def _pick(groups: list, mine: object, others: set) -> int:
+    """Which of the next jobs (their ``groups``, in order) a worker takes: the first of its
+    own last job's group ``mine``; else the first of a group no busy worker is on
+    (``others``), so two workers do not split a group; else the first (a worker never
+    waits for work while there is some)."""
+    rules = (lambda g: g == mine, lambda g: g not in others)
+    for wanted in rules if mine is not None else rules[1:]:
+        for i, g in enumerate(groups):
+            if wanted(g):
+                return i
+    return 0
+
+
 class FuturesPool:
     """Any ``concurrent.futures`` executor, fed at most ``window`` jobs at a time.
 
@@ -473,9 +510,12 @@ class FuturesPool:
             future.cancel()
         self._pending = {}
 
-    def run(self, jobs: Iterable[tuple[str, tuple]]) -> Iterator[tuple[str | None, object]]:
+    def run(
+        self, jobs: Iterable[tuple[str, tuple]], group: Callable | None = None
+    ) -> Iterator[tuple[str | None, object]]:
         """As ``LocalPool.run``; a failed future is a ``Lost(cause, known=False)``, and a
-        lost worker a ``(None, WorkerLost)`` pair (its jobs' results come later, from elsewhere)."""
+        lost worker a ``(None, WorkerLost)`` pair (its jobs' results come later, from
+        elsewhere). ``group`` is not used: the executor places the jobs."""
         jobs = iter(jobs)
         more = True
         while True:

@@ -80,6 +80,9 @@ class Batch:
         kernel: The compiled kernel's entries a job calls (``planner/kernel/cache.py``):
             on a cold cache a local run compiles them side by side before its workers
             start (``kernel.cache.prepare``), instead of every worker compiling them all.
+        group: Of a job, a hashable naming the work it shares with other jobs, which a
+            worker keeps (a sweep's: the trial's plan); a local run gives a worker the
+            jobs of its last job's group first (``LocalPool.run``). None: no such work.
     """
 
     name: str
@@ -93,6 +96,7 @@ class Batch:
     unit: str = "jobs"
     outcome: Callable | None = None
     kernel: tuple[str, ...] = ()
+    group: Callable | None = None
 
     def paths(self, out_dir: Path) -> tuple[Path, Path]:
         """(finished table, partial table) in ``out_dir``."""
@@ -267,7 +271,8 @@ def _play(pool, todo, table, batch, bar, record_dir, left_before, after_row) -> 
             yield batch.key(job), (job, None if record_dir is None else str(record_dir))
 
     with pool:
-        for key, outcome in pool.run(pairs()):
+        group = None if batch.group is None else (lambda job, _record_dir: batch.group(job))
+        for key, outcome in pool.run(pairs(), group):
             if isinstance(outcome, WorkerLost):
                 played.lost_workers.append(_worker_lost(outcome, batch, inflight))
                 bar.say(f"{batch.name}: {played.lost_workers[-1]}")

@@ -14,12 +14,14 @@ import pytest
 from conftest import left_in_session, session_pids
 
 from slopewalk.bench.batch.executor import (
+    LOOKAHEAD,
     START_METHOD,
     FuturesPool,
     Interrupted,
     LocalPool,
     Lost,
     WorkerLost,
+    _pick,
     death_cause,
     interruptible,
     stop_server,
@@ -84,6 +86,32 @@ def test_jobs_are_taken_lazily_and_leaving_stops_the_workers():
         processes = [w.process for w in pool._pool]
     assert next(taken) <= 5 + 2 + 1  # what was asked for, plus one in flight per worker
     assert all(not p.is_alive() for p in processes)
+
+
+def test_a_worker_takes_its_own_group_first_then_one_no_busy_worker_is_on():
+    """``_pick``: the next jobs' groups, the worker's last group, the busy workers' groups."""
+    assert _pick(["b", "a", "a"], "a", {"b"}) == 1  # its own group, though not first
+    assert _pick(["b", "b", "c"], "a", {"b"}) == 2  # not the group another worker is on
+    assert _pick(["b", "b"], "a", {"b"}) == 0  # only that: it still works, never waits
+    assert _pick(["b", "c"], None, set()) == 0  # a fresh worker among idle ones: in order
+
+
+def grouped_job(group: str, i: int) -> tuple[str, int]:
+    """The grouped test's job: its group and the worker that ran it."""
+    time.sleep(0.02)
+    return group, os.getpid()
+
+
+def test_grouped_jobs_all_run_once_and_the_first_group_stays_with_one_worker():
+    """Two workers, three groups of 4 jobs interleaved in the job order (a, b, c, a, ...):
+    every job runs once, and the first job's group runs on the worker that took it (the
+    other worker is never without another group's job until that group is done)."""
+    jobs = [(f"{g}{i}", (g, i)) for i in range(4) for g in "abc"]
+    assert len(jobs) < LOOKAHEAD
+    with LocalPool(grouped_job, workers=2) as pool:
+        results = list(pool.run(jobs, group=lambda g, _i: g))
+    assert sorted(k for k, _ in results) == sorted(k for k, _ in jobs)
+    assert len({pid for _, (g, pid) in results if g == "a"}) == 1
 
 
 def test_workers_hold_no_file_of_the_parent(tmp_path):

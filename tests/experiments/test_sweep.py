@@ -551,3 +551,31 @@ def test_a_noisy_sweep_writes_each_seed_and_its_noise(tmp_path):
     assert len(sweep_format(NOISE_COLUMNS).read_rows(table)) == 2
     with pytest.raises(TableError, match="columns are those of a sweep with a command_noise key"):
         sweep_format(COLUMNS).read_rows(table)
+
+
+def test_a_worker_plans_a_gait_once_for_its_frictions_and_modes_and_keeps_few_plans():
+    """``plan_of``: the trials of one spec and gait get one plan object (the per-plan work
+    is shared), a mass scaling is another robot and so another plan, and the worker keeps
+    no more than ``PLANS_KEPT`` plans."""
+    from slopewalk.bench.experiments.sweep import run
+
+    data = {
+        "steps": 1,
+        "grid": [
+            {"step_time": [1.0, 2.0], "slope": [0], "friction": [0.4, 1.0],
+             "actuators": ["stiff", "servo"]},
+            {"step_time": [1.0], "slope": [0], "friction": [1.0], "mass_scale": [{"all": 2}]},
+        ],
+    }  # fmt: skip
+    trials = list(sweep_from_dict(data, base_dir=Path(".")).trials)
+    groups: dict = {}
+    for trial in trials:
+        groups.setdefault(trial.plan_group, []).append(trial)
+    assert len(groups) == 3  # two step times, and the heavier robot
+    for members in groups.values():
+        plans = {id(run.plan_of(t)) for t in members}
+        assert len(plans) == 1  # kept while the group's trials run in a row
+    assert len(run._plans) <= run.PLANS_KEPT
+    for trial in trials:  # whatever it keeps, each trial walks its own robot and gait
+        plan = run.plan_of(trial)
+        assert plan.spec == trial.spec and plan.params == trial.gait()

@@ -40,14 +40,17 @@ from __future__ import annotations
 import contextlib
 import os
 import time
+from collections import OrderedDict
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from slopewalk.bench.batch.executor import one_line
 from slopewalk.bench.batch.progress import RateSinceFirst
 from slopewalk.bench.batch.run import Batch, Stopped, duration, run_batch
 from slopewalk.bench.experiments.sweep.config import SweepConfig, SweepTrial
+from slopewalk.bench.experiments.sweep.trials import spec_text
 from slopewalk.bench.tables.sweep import (
     SWEEP,
     SWEEP_CONTROLLER,
@@ -59,6 +62,9 @@ from slopewalk.bench.tables.sweep import (
 )
 from slopewalk.bench.tables.table import TableFormat, model_format
 from slopewalk.planner import pace
+
+if TYPE_CHECKING:
+    from slopewalk.planner.plan import Plan
 
 TABLE_NAME = "sweep.csv"
 PARTIAL_NAME = "sweep.partial.csv"
@@ -110,6 +116,28 @@ def first_estimate_s(
     return work * slowdown + compile_s
 
 
+PLANS_KEPT = 2  # plans a worker keeps (``plan_of``): its group's, and the one before
+
+
+_plans: OrderedDict[tuple, Plan] = OrderedDict()  # a worker's last plans, by spec and gait
+
+
+def plan_of(trial: SweepTrial) -> Plan:
+    """``trial``'s plan: the same object for the trials of one spec and gait that a worker
+    runs within ``PLANS_KEPT`` plans of each other (a sweep's trials of one plan at several
+    frictions or modes come to one worker in a row: ``SWEEP_BATCH.group``), so the work
+    done once per plan object (``planner/per_plan.py``) is shared; planned afresh otherwise."""
+    from slopewalk.planner.plan import plan_walk
+
+    gait = trial.gait()
+    key = (trial.spec_json or spec_text(trial.spec), gait)
+    plan = _plans.pop(key, None) or plan_walk(trial.spec, gait)
+    _plans[key] = plan
+    while len(_plans) > PLANS_KEPT:
+        _plans.popitem(last=False)
+    return plan
+
+
 def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
     """Plan, simulate and compare one trial (in a worker); its table row.
 
@@ -120,12 +148,11 @@ def run_one(trial: SweepTrial, record_dir: str | None = None) -> dict:
         record_dir: Where to write ``<trial_id>.rrd``, or None for no recording.
     """
     from slopewalk.bench.sim.trial import run_trial
-    from slopewalk.planner.plan import plan_walk
 
     try:
         # a model is fitted once per worker, its files' digest checked for every trial
         scene = None if trial.model is None else trial.model.scene(trial.spec)
-        plan = plan_walk(trial.spec, trial.gait())
+        plan = plan_of(trial)
         result = run_trial(trial.spec, trial.trial_spec(), plan=plan, scene=scene)
         row = trial.inputs() | outcome_columns(result, plan)
         if record_dir is not None:
@@ -159,6 +186,7 @@ SWEEP_BATCH = Batch(
     source="the sweep file",
     unit="trials",
     kernel=("plan", "predictors"),
+    group=lambda trial: trial.plan_group,
 )
 __all__ = ["SWEEP_BATCH", "Stopped", "SweepSummary", "run_one", "run_sweep"]
 

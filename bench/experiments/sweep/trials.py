@@ -176,6 +176,23 @@ class SweepTrial:
         return hashlib.sha256(text.encode()).hexdigest()[:12]
 
     @property
+    def plan_group(self) -> tuple:
+        """Which trials walk one plan, as a hint (``Batch.group``): the plan's inputs but the
+        friction, the actuators, the seed and the command noise, which only play it. A
+        drawn gait is drawn per friction too, so one group may hold a few plans; the
+        worker's plan memo (``run.plan_of``) is keyed by the spec and gait themselves."""
+        return (
+            self.step_time,
+            self.slope_deg,
+            self.robot,
+            self.mass_scale,
+            self.steps,
+            self.spec_end,
+            None if self.gait_choice is None else self.gait_choice.key,
+            None if self.model is None else self.model.digest,
+        )
+
+    @property
     def mass_scale_text(self) -> str:
         """``"legs=2"``, ``"all=10;legs=2"``, or ``"none"``."""
         return ";".join(f"{g}={f:g}" for g, f in self.mass_scale) or "none"
