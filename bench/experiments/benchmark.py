@@ -518,6 +518,9 @@ def trial_part_figures() -> dict:
     against the physics it predicts; ``trial_cpu_fraction_of_raw``: the trials' simulated
     steps per CPU second of ``run_trial`` over raw ``mj_step``'s per CPU second, the
     sweep's ``cpu_fraction_of_raw`` without the workers' start, the table and the report.
+    ``worker_trial_cpu_ms``: the trials as a sweep's worker runs them, a plan's trials in a
+    row sharing its per-plan work (``_worker_trials_cpu_s``), where the parts above plan
+    and predict every trial afresh.
     ``rollout_cpu_ms``: MuJoCo's rollout of each trial alone (``_rollout_alone``), the
     physics of the walk itself; ``rollout_cpu_fraction_of_raw``: its steps per CPU second
     over raw ``mj_step``'s, what a trial would keep with no other work at all (the walking
@@ -552,6 +555,7 @@ def trial_part_figures() -> dict:
         timed("trial", run_trial, t.spec, t.trial_spec())
         raw_cpu_s += played / raw_step_rate(played, 1, clock=time.process_time)
         steps += played
+    parts["worker_trial"] = _worker_trials_cpu_s(trials)
     per = {part: 1e3 * cpu / len(trials) for part, cpu in parts.items()}
     return {
         "part_trials": len(trials),
@@ -560,10 +564,23 @@ def trial_part_figures() -> dict:
         "rollout_cpu_ms": per["rollout"],
         "prediction_cpu_ms": per["prediction"],
         "trial_cpu_ms": per["trial"],
+        "worker_trial_cpu_ms": per["worker_trial"],
         "prediction_over_playback": per["prediction"] / per["playback"],
         "trial_cpu_fraction_of_raw": raw_cpu_s / parts["trial"],
         "rollout_cpu_fraction_of_raw": raw_cpu_s / parts["rollout"],
     }
+
+
+def _worker_trials_cpu_s(trials) -> float:
+    """CPU time [s] of ``trials`` through the sweep's job (``run_one``) in their plan
+    groups' order, as a worker of the sweep takes them (``SWEEP_BATCH.group``): the
+    trials of one plan in a row, sharing its plan and per-plan work (``plan_of``)."""
+    from slopewalk.bench.experiments.sweep.run import run_one
+
+    start = time.process_time()
+    for trial in sorted(trials, key=lambda t: repr(t.plan_group)):
+        run_one(trial)
+    return time.process_time() - start
 
 
 def _rollout_alone(plan, *, friction: float, actuators: str) -> float:
