@@ -79,7 +79,17 @@ class _Loop(TypedDict):
 
 
 def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPrediction:
-    """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ."""
+    """All analytic predictions of ``plan`` played with ``actuators`` on a plane of μ.
+
+    Once per plan object, μ and mode (``planner/per_plan.py``): the trials that play one
+    plan alike but for their command noise (a sweep's noise replicas, its seeds) share it;
+    the noise is the simulation's alone."""
+    return _prediction_of(plan, float(friction), actuators)
+
+
+@once_per_plan
+def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPrediction:
+    """``predict_trial``'s work."""
     servo = servo_settings(plan.spec, actuators)
     loop = _loop_of(plan, servo)
     walk = _compliant_of(plan, servo)

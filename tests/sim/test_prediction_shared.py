@@ -28,7 +28,10 @@ def test_trials_on_one_plan_object_predict_as_trials_on_fresh_plans(spec, actuat
     work to do; the shared plan is played at μ 1 first, then at μ 0.4."""
     gait = GaitParams.nominal(spec, 0.75, slope=np.deg2rad(10.0), steps=2)
     shared = plan_walk(spec, gait)
+    got = {}
     for friction in (1.0, 0.4, 1.0):
-        got = predict_trial(shared, friction=friction, actuators=actuators)
+        got[friction] = predict_trial(shared, friction=friction, actuators=actuators)
         fresh = predict_trial(plan_walk(spec, gait), friction=friction, actuators=actuators)
-        _same(got, fresh)
+        _same(got[friction], fresh)
+    # a noise replica (the same plan, μ and mode) is given the prediction already made
+    assert predict_trial(shared, friction=1.0, actuators=actuators) is got[1.0]
