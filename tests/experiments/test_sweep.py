@@ -579,3 +579,21 @@ def test_a_worker_plans_a_gait_once_for_its_frictions_and_modes_and_keeps_few_pl
     for trial in trials:  # whatever it keeps, each trial walks its own robot and gait
         plan = run.plan_of(trial)
         assert plan.spec == trial.spec and plan.params == trial.gait()
+
+
+def test_a_worker_holds_the_per_plan_work_of_the_plans_it_keeps_only():
+    """A worker runs trials of two plans in turn: the work done once per plan (the loop's
+    linearisation, the prediction) is let go with the plan it was done for, so a long
+    sweep's worker does not grow (nothing kept may refer to its plan)."""
+    import gc
+
+    from slopewalk.bench.experiments.sweep import run
+    from slopewalk.bench.sim import prediction
+    from slopewalk.planner import servo_loop
+
+    data = {"steps": 1, "grid": {"step_time": [1.0, 2.0], "slope": [0], "friction": [1.0, 0.6]}}
+    for trial in sweep_from_dict(data, base_dir=Path(".")).trials:
+        assert run.run_one(trial)["simulated_verdict"] != "error"
+    gc.collect()
+    for memo in (servo_loop._plan_linearisation, prediction._prediction_of):
+        assert memo.plans_kept() <= run.PLANS_KEPT

@@ -116,7 +116,10 @@ def first_estimate_s(
     return work * slowdown + compile_s
 
 
-PLANS_KEPT = 2  # plans a worker keeps (``plan_of``): its group's, and the one before
+# plans a worker keeps (``plan_of``): its group's. With a plan go its per-plan results
+# (``planner/per_plan.py``): for a 4,400-sample walk (4 steps of 1 s) the plan 2.8 MB, the
+# loop's linearisation 8.2 MB, and 6.2 MB per friction and mode predicted on it
+PLANS_KEPT = 1
 
 
 _plans: OrderedDict[tuple, Plan] = OrderedDict()  # a worker's last plans, by spec and gait
@@ -124,9 +127,10 @@ _plans: OrderedDict[tuple, Plan] = OrderedDict()  # a worker's last plans, by sp
 
 def plan_of(trial: SweepTrial) -> Plan:
     """``trial``'s plan: the same object for the trials of one spec and gait that a worker
-    runs within ``PLANS_KEPT`` plans of each other (a sweep's trials of one plan at several
-    frictions or modes come to one worker in a row: ``SWEEP_BATCH.group``), so the work
-    done once per plan object (``planner/per_plan.py``) is shared; planned afresh otherwise."""
+    runs in a row (a sweep's trials of one plan at several frictions, modes or noise seeds
+    come to one worker in a row: ``SWEEP_BATCH.group``), so the work done once per plan
+    object (``planner/per_plan.py``) is shared; planned afresh otherwise. The plan before
+    is let go, and its per-plan results with it (``PLANS_KEPT``)."""
     from slopewalk.planner.plan import plan_walk
 
     gait = trial.gait()

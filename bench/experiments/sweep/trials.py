@@ -177,11 +177,14 @@ class SweepTrial:
 
     @property
     def plan_group(self) -> tuple:
-        """Which trials walk one plan, as a hint (``Batch.group``): the plan's inputs but the
-        friction, the actuators, the seed and the command noise, which only play it. A
-        drawn gait is drawn per friction too, so one group may hold a few plans; the
-        worker's plan memo (``run.plan_of``) is keyed by the spec and gait themselves."""
+        """Which trials walk one plan (``Batch.group``): the plan's inputs, not the actuators,
+        the seed and the command noise, which only play it, nor the friction, but where the
+        gait is drawn (a draw is seeded by its cell, friction included: ``GaitChoice``).
+        A hint: the worker's plan memo (``run.plan_of``) is keyed by the spec and the gait
+        themselves."""
+        drawn = self.gait_choice is not None and bool(self.gait_choice.family)
         return (
+            self.friction if drawn else None,
             self.step_time,
             self.slope_deg,
             self.robot,
