@@ -14,7 +14,7 @@ The results are the same numbers a fresh call gives (the function is determinist
 and called on the same object), and the same arrays: a caller must not write into
 them. They are not made read-only, because a read-only array is another type to the
 compiled kernel (numba compiles a new signature for it, which the cache of a fresh
-install does not hold); ``tests/planner/test_per_plan.py`` plays two trials on one
+install does not hold); ``tests/sim/test_prediction_shared.py`` plays trials on one
 plan object and checks each against a trial on a fresh plan instead.
 """
 

@@ -385,7 +385,7 @@ class LocalPool:
         if first is None:
             return
         jobs = itertools.chain([first], jobs)
-        ahead: list[tuple[str, tuple]] = []  # the next jobs, when grouped
+        ahead: list[tuple[object, tuple[str, tuple]]] = []  # the next (group, job), grouped
         retry: list[tuple[str, tuple]] = []  # jobs not delivered to a worker that had died
         more = True
         for _ in range(self.workers):
@@ -420,12 +420,13 @@ class LocalPool:
         """The next job for ``worker`` (``run``), or None when there is none left."""
         if group is None:
             return next(jobs, None)
-        ahead.extend(itertools.islice(jobs, LOOKAHEAD - len(ahead)))
+        ahead.extend(
+            (group(*job[1]), job) for job in itertools.islice(jobs, LOOKAHEAD - len(ahead))
+        )
         if not ahead:
             return None
         others = {w.group for w in self._pool if w is not worker and w.job is not None}
-        job = ahead.pop(_pick([group(*args) for _, args in ahead], worker.group, others))
-        worker.group = group(*job[1])
+        worker.group, job = ahead.pop(_pick([g for g, _ in ahead], worker.group, others))
         return job
 
     def _start(self, i: int) -> None:
