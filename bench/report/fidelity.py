@@ -43,6 +43,7 @@ from slopewalk.planner.verdict import (
     TIP_ANGLE,
     VERDICT_KINDS,
 )
+from slopewalk.planner.walk_prediction import TOUCH_ALLOWANCE
 
 VERDICTS = ("paper", "compliant", "predicted")
 _COLUMN = {
@@ -461,6 +462,11 @@ def cause_class(r) -> str:
     * ring the robot rode out: predicted ``ring`` (the walk lands again before the
       servos' ring from the last landing has settled, ``planner/servo_ring.py``), yet
       the robot walked: the ring it found was not enough to throw it;
+    * a dragged swing sole the robot walked over: predicted ``swing_drag`` (the swing
+      sole props the robot and the walk carries it along the plane,
+      ``planner.verdict.swing_drag_events``), yet the robot walked, its swing foot on the
+      plane for longer than ``TOUCH_ALLOWANCE`` in one single support (measured,
+      ``swing_touch_s``): the sole dragged in MuJoCo too, and nothing tripped on it;
     * unexplained: none of these.
     """
     walks = _walks(r["predicted_verdict"])
@@ -481,6 +487,9 @@ def cause_class(r) -> str:
         return "foot slide in the plan only"
     if r["predicted_verdict"] == "ring" and _walks(r["simulated_verdict"]):
         return "ring the robot rode out"
+    dragged = r["predicted_verdict"] == "swing_drag" and _walks(r["simulated_verdict"])
+    if dragged and r["swing_touch_s"] > TOUCH_ALLOWANCE:
+        return "a dragged swing sole the robot walked over"
     return "unexplained"
 
 

@@ -17,7 +17,7 @@ def _row(paper, predicted, simulated, **extra):
         else simulated, "first_event_time_s": float("nan") if simulated == "stable" else 0.8,
         "analytic_min_margin_mm": -3.0, "compliant_min_margin_mm": -3.2,
         "predicted_rotation_deg": 1.5, "simulated_max_tilt_deg": 5.4,
-        "tracking_rms_deg": 0.3, "unplanned_support_s": 0.1,
+        "tracking_rms_deg": 0.3, "unplanned_support_s": 0.1, "swing_touch_s": 0.0,
         "zmp_rms_mm": 4.0, "zmp_max_mm": 40.0,
     }  # fmt: skip
     return row | extra
@@ -68,6 +68,15 @@ def test_each_disagreement_gets_its_class():
     # a tip whose rocking stays under the tip angle is a sole the servos stand on its
     # edge: landed tilted past it, or turned past it from the other in double support
     # (planner.verdict.landing_events, double_support_events)
+    # predicted swing_drag, walked: explained only when MuJoCo's swing foot did stay on the
+    # plane through a single support (0.5 s, not the floor's early touch of 0.05 s)
+    drag = _row("stable", "swing_drag", "stable", swing_touch_s=0.5)
+    assert cause_class(drag) == "a dragged swing sole the robot walked over"
+    assert cause_class(drag | {"swing_touch_s": 0.05}) == "unexplained"
+    assert cause_class(drag | {"swing_touch_s": float("nan")}) == "unexplained"
+    assert cause_class(drag | {"simulated_verdict": "slip"}) != (
+        "a dragged swing sole the robot walked over"
+    )
     landed = over | {"predicted_rotation_deg": 1.2, "simulated_max_tilt_deg": 4.2}
     assert cause_class(landed) == "a sole on its edge in the prediction only"
     assert cause_class(landed | {"predicted_rotation_deg": 5.1}) == (
