@@ -296,7 +296,10 @@ def _printed_names() -> dict[str, set[str]]:
         "planner": f["planner_figures"],
         "sim": f["sim_figures"],
         "ga": f["ga_figures"],
-        "sweep": f["grid_figures"] | f["trial_part_figures"] | f["sweep_figures"],
+        "sweep": f["grid_figures"]
+        | f["trial_part_figures"]
+        | f["sweep_figures"]
+        | f["ceiling_figures"],
         "controller": f["controller_figures"],
         "envelope": f["envelope_figures"],
     }

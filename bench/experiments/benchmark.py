@@ -685,10 +685,30 @@ def run(what: str) -> dict:
         "planner": planner_figures,
         "sim": sim_figures,
         "ga": ga_figures,
-        "sweep": lambda: grid_figures() | trial_part_figures() | sweep_figures(),
+        "sweep": lambda: _with_ceiling(grid_figures() | trial_part_figures() | sweep_figures()),
         "controller": controller_figures,
         "envelope": _envelope_figures,
     }[what]()
+
+
+def ceiling_figures(figures: dict) -> dict:
+    """The most ``fraction_of_raw`` the sweep of ``figures`` could reach on this machine if
+    its workers did nothing but start and step MuJoCo: the start (``worker_start_s``),
+    then every trial's rollout at its measured cost per step (``rollout_cpu_fraction_of_raw``
+    of raw ``mj_step``'s) on all workers, busy to the end, with no planning, decoding,
+    prediction, table or idle worker:
+
+        sim_steps / (worker_start_s + sim_steps / (raw · rollout_fraction)) / raw
+
+    raw the machine's stepping capacity (``raw_steps_per_s``). A goal above it cannot be
+    met by the bench's own work on this machine and sweep."""
+    steps, raw = figures["sim_steps"], figures["raw_steps_per_s"]
+    rollouts_s = steps / (raw * figures["rollout_cpu_fraction_of_raw"])
+    return {"fraction_of_raw_ceiling": steps / (figures["worker_start_s"] + rollouts_s) / raw}
+
+
+def _with_ceiling(figures: dict) -> dict:
+    return figures | ceiling_figures(figures)
 
 
 def _envelope_figures() -> dict:
