@@ -72,6 +72,16 @@ def repredict(sweep_file: str | Path, table: str | Path, *, mode: str | None = N
     Raises:
         SlopewalkError: ``table`` has no ``trial_id`` or ``predicted_verdict`` column.
     """
+    return list(_repredicted(load_sweep(sweep_file).trials, table_rows(table), mode))
+
+
+def table_rows(table: str | Path) -> dict[str, dict]:
+    """The rows of a finished sweep table by ``trial_id``.
+
+    Raises:
+        SlopewalkError: it has no ``trial_id``, ``predicted_verdict`` or
+            ``simulated_verdict`` column.
+    """
     with open(table, newline="") as f:
         reader = csv.DictReader(f)
         missing = {"trial_id", "predicted_verdict", "simulated_verdict"} - set(
@@ -79,8 +89,7 @@ def repredict(sweep_file: str | Path, table: str | Path, *, mode: str | None = N
         )
         if missing:
             raise SlopewalkError(f"{table}: not a sweep table (no {', '.join(sorted(missing))})")
-        rows = {r["trial_id"]: r for r in reader}
-    return list(_repredicted(load_sweep(sweep_file).trials, rows, mode))
+        return {r["trial_id"]: r for r in reader}
 
 
 def _repredicted(trials, rows: dict, mode: str | None) -> Iterator[Repredicted]:
@@ -113,8 +122,8 @@ def report(found: list[Repredicted]) -> str:
     lines = ["mode: trials, agreement in the table -> now (predicted verdict walks as MuJoCo's)"]
     for mode in dict.fromkeys(r.actuators for r in found):
         mine = [r for r in found if r.actuators == mode]
-        before = sum(_walks(r.before) == _walks(r.simulated) for r in mine)
-        now = sum(_walks(r.now) == _walks(r.simulated) for r in mine)
+        before = sum(walks(r.before) == walks(r.simulated) for r in mine)
+        now = sum(walks(r.now) == walks(r.simulated) for r in mine)
         lines.append(f"{mode}: {len(mine)}, {before} -> {now}")
     moved = [r for r in found if r.now != r.before]
     lines.append(f"moved: {len(moved)}")
@@ -122,24 +131,34 @@ def report(found: list[Repredicted]) -> str:
     return "\n".join(lines)
 
 
-def _walks(verdict: str) -> bool:
+def walks(verdict: str) -> bool:
+    """Whether a verdict (predicted or simulated) says the robot walked."""
     return verdict == "stable"
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m slopewalk.bench.experiments.repredict", description=__doc__.split("\n")[0]
-    )
+def on_table(prog: str, about: str, work, argv: list[str] | None) -> int:
+    """The command line of a design tool run on a finished sweep table and its sweep file:
+    prints ``work(sweep_file, table, mode)``; a bad file is one error line, exit 2."""
+    parser = argparse.ArgumentParser(prog=f"python -m {prog}", description=about)
     parser.add_argument("sweep_file", help="the sweep TOML that wrote the table")
     parser.add_argument("table", help="its finished sweep.csv")
     parser.add_argument("--mode", help="only this actuator mode's trials")
     args = parser.parse_args(argv)
     try:
-        print(report(repredict(args.sweep_file, args.table, mode=args.mode)))
+        print(work(args.sweep_file, args.table, args.mode))
     except (SlopewalkError, OSError) as err:
-        print(f"repredict: error: {err}", file=sys.stderr)
+        print(f"{prog.rsplit('.', 1)[-1]}: error: {err}", file=sys.stderr)
         return 2
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    return on_table(
+        "slopewalk.bench.experiments.repredict",
+        __doc__.split("\n")[0],
+        lambda sweep_file, table, mode: report(repredict(sweep_file, table, mode=mode)),
+        argv,
+    )
 
 
 if __name__ == "__main__":
