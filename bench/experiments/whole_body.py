@@ -38,6 +38,7 @@ tips there) and splits the load 4.24 / 2.33 N at the end of the double support (
 section. Run, from the repository root, on a finished sweep and its file:
 
     python -m slopewalk.bench.experiments.whole_body SWEEP.toml TABLE.csv [--mode MODE]
+        [--workers N]
 
 It prints per actuator mode the table's predicted verdict's agreement with MuJoCo's on
 walking, the model's alone (walks unless it tips) and the predicted verdict with the
@@ -52,8 +53,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slopewalk.bench.experiments.repredict import on_table, table_rows, walks
-from slopewalk.bench.experiments.sweep.config import load_sweep
+from slopewalk.bench.experiments.controller_comparison import map_local
+from slopewalk.bench.experiments.repredict import on_table, table_jobs, walks
 from slopewalk.planner.compliance import torque_at_rest
 from slopewalk.planner.kinematics import Chain, gravity_in_slope
 from slopewalk.planner.plan import Plan, plan_walk
@@ -444,33 +445,30 @@ class Evaluated:
     tip: float | None
 
 
-def evaluate(sweep_file: str | Path, table: str | Path, *, mode: str | None = None):
+def evaluate(
+    sweep_file: str | Path, table: str | Path, *, mode: str | None = None, workers: int = 1
+) -> list[Evaluated]:
     """The model on every trial of ``table`` (a finished sweep of ``sweep_file``), in the
-    sweep file's order; ``mode``: only that actuator mode's.
+    sweep file's order, on ``workers`` processes; ``mode``: only that actuator mode's.
 
     Raises:
         SlopewalkError: ``table`` is not a sweep table.
     """
-    rows = table_rows(table)
-    found = []
-    for trial in load_sweep(sweep_file).trials:
-        row = rows.get(trial.trial_id)
-        if row is None or row["simulated_verdict"] == "error":
-            continue
-        if mode is not None and trial.actuators != mode:
-            continue
-        plan = plan_walk(trial.spec, trial.gait())
-        walked = trial_walk(plan, friction=trial.friction, actuators=trial.actuators)
-        found.append(
-            Evaluated(
-                trial.trial_id,
-                trial.actuators,
-                row["simulated_verdict"],
-                row["predicted_verdict"],
-                tip_time(plan, walked),
-            )
-        )
-    return found
+    return map_local(_evaluated, table_jobs(sweep_file, table, mode), workers)
+
+
+def _evaluated(job: tuple) -> Evaluated:
+    """One (trial, row) of ``table_jobs`` (top level: a worker's job)."""
+    trial, row = job
+    plan = plan_walk(trial.spec, trial.gait())
+    walked = trial_walk(plan, friction=trial.friction, actuators=trial.actuators)
+    return Evaluated(
+        trial.trial_id,
+        trial.actuators,
+        row["simulated_verdict"],
+        row["predicted_verdict"],
+        tip_time(plan, walked),
+    )
 
 
 def report(found: list[Evaluated]) -> str:
@@ -492,7 +490,9 @@ def main(argv: list[str] | None = None) -> int:
     return on_table(
         "slopewalk.bench.experiments.whole_body",
         __doc__.split("\n")[0],
-        lambda sweep_file, table, mode: report(evaluate(sweep_file, table, mode=mode)),
+        lambda sweep_file, table, mode, workers: report(
+            evaluate(sweep_file, table, mode=mode, workers=workers)
+        ),
         argv,
     )
 

@@ -49,6 +49,14 @@ def test_the_predictor_that_wrote_a_table_predicts_each_of_its_trials_as_it_did(
     assert "moved: 0" in report(found)
 
 
+def test_two_worker_processes_predict_what_one_does_in_the_same_order(swept):
+    one, two = repredict(*swept), repredict(*swept, workers=2)
+    assert [(r.trial_id, r.now, r.events_now) for r in two] == [
+        (r.trial_id, r.now, r.events_now) for r in one
+    ]
+    assert [r.rotation_now_deg for r in two] == [r.rotation_now_deg for r in one]
+
+
 def test_the_sweep_exercises_what_a_wrong_reconstruction_would_miss(swept):
     # the spec end and the friction each change some prediction in the table, so a
     # re-prediction on the nominal spec or at another μ would not match it (test above)

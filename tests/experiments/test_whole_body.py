@@ -117,3 +117,12 @@ def test_a_file_that_is_not_a_sweep_table_is_one_error_line(tmp_path, capsys):
     assert wb.main(["bench/experiments/sweeps/paper.toml", str(bad)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not a sweep table" in err
+
+
+@pytest.mark.parametrize("workers", ["0", "x", "300"])
+def test_a_bad_worker_count_is_one_error_line(workers, capsys):
+    with pytest.raises(SystemExit) as stop:
+        wb.main(["bench/experiments/sweeps/paper.toml", "t.csv", "--workers", workers])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "a whole number from 1 to 256" in err and repr(workers) in err
