@@ -20,7 +20,6 @@ not) as the table has it and as predicted now, and each trial whose verdict move
 
 from __future__ import annotations
 
-import argparse
 import csv
 import sys
 from dataclasses import dataclass
@@ -30,7 +29,9 @@ import numpy as np
 
 from slopewalk.bench.experiments.controller_comparison import map_local
 from slopewalk.bench.experiments.sweep.config import load_sweep
+from slopewalk.bench.flags import WORKERS, Parser, integer
 from slopewalk.bench.sim.prediction import predict_trial
+from slopewalk.bench.tables.sweep import walks
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.plan import plan_walk
 
@@ -147,20 +148,19 @@ def report(found: list[Repredicted]) -> str:
     return "\n".join(lines)
 
 
-def walks(verdict: str) -> bool:
-    """Whether a verdict (predicted or simulated) says the robot walked."""
-    return verdict == "stable"
-
-
 def on_table(prog: str, about: str, work, argv: list[str] | None) -> int:
     """The command line of a design tool run on a finished sweep table and its sweep file:
     prints ``work(sweep_file, table, mode, workers)``; a bad file is one error line, exit 2."""
-    parser = argparse.ArgumentParser(prog=f"python -m {prog}", description=about)
+    parser = Parser(prog=f"python -m {prog}", description=about)  # usage errors: one line
     parser.add_argument("sweep_file", help="the sweep TOML that wrote the table")
     parser.add_argument("table", help="its finished sweep.csv")
     parser.add_argument("--mode", help="only this actuator mode's trials")
     parser.add_argument(
-        "--workers", type=_workers, default=1, help="worker processes (default 1: here)"
+        "--workers",
+        type=integer(WORKERS),
+        default=1,
+        metavar="N",
+        help=f"worker processes, in {WORKERS} (default 1: here)",
     )
     args = parser.parse_args(argv)
     try:
@@ -169,17 +169,6 @@ def on_table(prog: str, about: str, work, argv: list[str] | None) -> int:
         print(f"{prog.rsplit('.', 1)[-1]}: error: {err}", file=sys.stderr)
         return 2
     return 0
-
-
-def _workers(text: str) -> int:
-    """``--workers``: a whole number of processes, 1 to 256."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= 256:
-        raise argparse.ArgumentTypeError(f"{text!r}: a whole number from 1 to 256")
-    return value
 
 
 def main(argv: list[str] | None = None) -> int:

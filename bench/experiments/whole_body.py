@@ -54,9 +54,10 @@ from pathlib import Path
 import numpy as np
 
 from slopewalk.bench.experiments.controller_comparison import map_local
-from slopewalk.bench.experiments.repredict import on_table, table_jobs, walks
+from slopewalk.bench.experiments.repredict import on_table, table_jobs
+from slopewalk.bench.tables.sweep import walks
 from slopewalk.planner.compliance import torque_at_rest
-from slopewalk.planner.kinematics import Chain, gravity_in_slope
+from slopewalk.planner.kinematics import GRAVITY, Chain, gravity_in_slope
 from slopewalk.planner.plan import Plan, plan_walk
 from slopewalk.planner.servo_loop import _loop_model, _settled_offset
 from slopewalk.planner.verdict import LOADED_FRACTION, TIP_ANGLE
@@ -64,7 +65,6 @@ from slopewalk.planner.verdict import LOADED_FRACTION, TIP_ANGLE
 BASE = 3  # z, roll, pitch of the stance sole
 DOF = BASE + 8
 TANGENT_FACTOR = 4.0  # the second sole's hold along the plane, in corner stiffnesses
-GRAVITY = 9.81  # [m/s²], the weight that ``LOADED_FRACTION`` is a share of
 
 
 @dataclass(frozen=True)
@@ -296,7 +296,6 @@ class _Loop:
     """The servo loop along the plan, as ``servo_loop`` linearises it (joint rows)."""
 
     need: np.ndarray  # τ_ref + A q̈_ref + d q̇_ref [N m], (n, 8)
-    mass: np.ndarray  # its M [kg m²], (n, 8, 8)
     gravity_k: np.ndarray  # its K_g [N m/rad], (n, 8, 8)
     velocity_c: np.ndarray  # its C [N m s/rad], (n, 8, 8)
     feedforward: np.ndarray  # τ_ff [N m], (n, 8)
@@ -319,12 +318,10 @@ def walk(
     settings) on a soft floor of corner stiffness [N/m] and contact time [s] (module doc)."""
     model = model_of(plan)
     both = plan.double_support
-    tau, mass, gravity_k, velocity_c, jac = _loop_model(plan, both, True)
+    tau, _, gravity_k, velocity_c, jac = _loop_model(plan, both, True)
     ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward, float)
     gains = (stiffness, velocity_gain, damping, armature, force_limit)
-    loop = _Loop(
-        tau + armature * plan.qdd + damping * plan.qd, mass, gravity_k, velocity_c, ff, gains
-    )
+    loop = _Loop(tau + armature * plan.qdd + damping * plan.qd, gravity_k, velocity_c, ff, gains)
     rest = gravity_k[0] + stiffness * np.eye(8)
     limit = None if feedforward is None else force_limit
     x, v = np.zeros(DOF), np.zeros(DOF)
@@ -384,7 +381,7 @@ def _step(plan, model: Model, loop: _Loop, floor, k: int, h: float, x, v, anchor
     force[BASE:] = held + np.where(free, loop.feedforward[k] - kv * plan.qd[k], 0.0) - loop.need[k]
     jz = model.corner[:, :, k]
     force -= jz.T @ model.ideal[:, k]
-    ahead = model.nominal[:, k] - k_c * (model.height[:, k] + jz @ (x + h * v)) - c_c * (jz @ v)
+    ahead = _pushes(model, k, floor, x + h * v, v)
     on = ahead > 0
     touching = jz[on]
     stiff += k_c * touching.T @ touching
@@ -401,8 +398,16 @@ def _step(plan, model: Model, loop: _Loop, floor, k: int, h: float, x, v, anchor
     a = np.linalg.solve(mass + h * c + h * h * stiff, force - c @ v - stiff @ (x + h * v))
     v = v + h * a
     x = x + h * v
-    load = model.nominal[:, k] - k_c * (model.height[:, k] + jz @ x) - c_c * (jz @ v)
-    return x, v, np.where(on, np.maximum(load, 0.0), 0.0), anchor
+    return x, v, np.where(on, np.maximum(_pushes(model, k, floor, x, v), 0.0), 0.0), anchor
+
+
+def _pushes(model: Model, k: int, floor: tuple, position: np.ndarray, rate: np.ndarray):
+    """What each corner's spring and damper would push at sample k for the state
+    ``position`` moving at ``rate`` [N], (8,): f_nom − k_c (height + z) − c_c ż (module doc;
+    negative where the corner is off the plane)."""
+    k_c, c_c = floor
+    jz = model.corner[:, :, k]
+    return model.nominal[:, k] - k_c * (model.height[:, k] + jz @ position) - c_c * (jz @ rate)
 
 
 def tip_time(plan: Plan, walk: Walk) -> float | None:

@@ -35,6 +35,7 @@ from slopewalk.bench.report.replicas import (
     undecided,
 )
 from slopewalk.bench.tables.sweep import SIMULATED_VERDICTS
+from slopewalk.bench.tables.sweep import walks as _walks
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.verdict import (
     LOADED_FRACTION,
@@ -220,10 +221,6 @@ def _thresholds() -> list[str]:
         "tip, fall or divergence).",
         "",
     ]
-
-
-def _walks(verdict) -> bool:
-    return verdict == "stable"
 
 
 def _table_section(

@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections import defaultdict
 
 from slopewalk.bench.tables.sweep import NOMINAL  # the spec_end of a row on the spec's own values
+from slopewalk.bench.tables.sweep import walks as _walks
 
 # the inputs that make a trial, seed and noise aside (a sweep table's columns), and those
 # of a drawn or given gait (``tables.sweep.GAIT_COLUMNS``), in the tables that have them
@@ -43,10 +44,6 @@ GAIT_INPUTS = ("gait", "hip_height_m", "swing_lift_m", "tilt_deg", "pelvis_offse
 def seeds_of(rows: list[dict]) -> list:
     """The distinct seeds of ``rows``, in order of first appearance (0 for a row without)."""
     return list(dict.fromkeys(r.get("seed", 0) for r in rows))
-
-
-def _walks(verdict) -> bool:
-    return verdict == "stable"
 
 
 def _agrees(r, column: str) -> bool:

@@ -42,6 +42,12 @@ DEG = 180 / math.pi  # rad → deg: ``np.rad2deg``'s factor, bit for bit
 MM = 1e3  # m → mm
 
 
+def walks(verdict: str) -> bool:
+    """Whether a verdict column's value (``analytic_verdict``, ``compliant_verdict``,
+    ``predicted_verdict`` or ``simulated_verdict``) says the robot walked: ``stable``."""
+    return verdict == "stable"
+
+
 @dataclass(frozen=True)
 class Column:
     """One column of the sweep table: where its value comes from and how it is written.
