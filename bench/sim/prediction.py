@@ -36,12 +36,14 @@ import numpy as np
 from slopewalk.bench.sim.floor import SoftFloor, scene_corner_stiffness
 from slopewalk.bench.sim.model import Servo, scene_xml, servo_settings
 from slopewalk.bench.sim.playback import feedforward_stance_swing
+from slopewalk.planner import whole_body
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
 from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import linearised_at, servo_walk
 from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
 from slopewalk.planner.verdict import Prediction, predict
+from slopewalk.planner.whole_body import Walk, tip_time
 
 
 @dataclass(frozen=True)
@@ -99,6 +101,7 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
     floor_stiffness, contact_time = _floor_of(
         scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
     )
+    body = _body_walk(plan, servo, floor_stiffness, contact_time)
     prediction = predict(
         plan,
         friction=friction,
@@ -108,6 +111,7 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
         floor_stiffness=floor_stiffness,
         contact_time=contact_time,
         ring_settle=_ring_settle(plan, servo),
+        body_tip=tip_time(plan, body),
     )
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
@@ -115,6 +119,29 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
         walk=walk,
         prediction=prediction,
         loop_walk=loop_walk,
+    )
+
+
+def body_walk(plan: Plan, *, friction: float, actuators: str) -> Walk:
+    """The whole-body walk (``planner/whole_body.py``) of ``plan`` played with ``actuators``
+    on the trial's floor (its scene's corner stiffness and contact time), as the
+    prediction makes it."""
+    servo = servo_settings(plan.spec, actuators)
+    xml = scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
+    return _body_walk(plan, servo, *_floor_of(xml))
+
+
+@once_per_plan
+def _body_walk(plan: Plan, servo: Servo, corner_stiffness: float, contact_time: float) -> Walk:
+    """``whole_body.walk`` of ``plan`` under ``servo``'s loop on a floor of that corner
+    stiffness [N/m] and contact time [s]; once per plan object, servo and floor (a sweep's
+    trials of one plan at several frictions share it: the model has no friction)."""
+    return whole_body.walk(
+        plan,
+        force_limit=servo.force_limit,
+        corner_stiffness=corner_stiffness,
+        contact_time=contact_time,
+        **_loop_of(plan, servo),
     )
 
 

@@ -129,8 +129,8 @@ class Entry:
 ENTRIES = {
     "plan": Entry("plan", ("run",), 18.0),  # a plan's series (run.series)
     "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
-    # a trial's servo loop and support rocking
-    "predictors": Entry("predictors", ("dynamics", "servo", "rocking"), 19.0),
+    # a trial's servo loop, support rocking and whole-body walk
+    "predictors": Entry("predictors", ("dynamics", "servo", "rocking", "whole_body"), 19.0),
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process

@@ -61,7 +61,7 @@ def _stages(signatures: dict[str, str]) -> None:
 
 def _predictors() -> None:
     """The predictors' compiled functions, each called once on a 3-sample walk at rest."""
-    from slopewalk.planner.kernel import dynamics, rocking, servo
+    from slopewalk.planner.kernel import dynamics, rocking, servo, whole_body
 
     _stages(_PREDICTOR_STAGES)
     from slopewalk.planner.kernel.tables import ChainTable
@@ -78,6 +78,18 @@ def _predictors() -> None:
     servo.integrate(
         eye, 0 * eye, 0 * eye, zero, zero, zero, dt, stance, both,
         np.zeros((n, 4, dof)), gains, np.zeros(dof),
+    )  # fmt: skip
+    body = 11  # the whole-body walk's x: the stance sole's z, roll, pitch and 8 joints
+    square, corners = np.repeat(np.eye(body)[None], n, axis=0), np.zeros((n, 8))
+    whole_body.integrate(
+        square, 0 * square, np.zeros((n, 8, body)), corners, corners, corners,
+        np.zeros((n, 3, body)), np.zeros((n, 3, body)), zero, 0 * eye, 0 * eye, zero, zero,
+        dt, stance, both, gains[:5], (1.0, 0.0, 1.0), 0.5, np.zeros(body),
+    )  # fmt: skip
+    links = np.zeros((n, 9, 3))
+    whole_body.mass_and_stiffness(
+        np.ones(9), links, np.zeros((n, 9, 3, 3)), np.zeros((n, 8, 3)), np.zeros((n, 8, 3)),
+        np.zeros((n, 3)), links,
     )  # fmt: skip
     row, pair = np.zeros(n), np.zeros((2, n))
     lines = np.array([[-1.0] * n, [1.0] * n])
