@@ -10,7 +10,8 @@ joint power); ``run`` drives it over a plan's samples or over a GA population
 walk a servo reaches: torques and their linearisation), and ``servo`` the servo loop
 through time and the compliance fixed point on them (the per-trial predictors of
 ``servo_loop`` and ``compliance``, whose numpy code stays as the reference), ``rocking``
-the tipping predictor's step through time (``tipping.rocking``'s loop).
+the tipping predictor's step through time (``tipping.rocking``'s loop), ``whole_body``
+the whole-body walk's mass matrix, stiffness and time loop (``planner/whole_body.py``'s).
 
 Compiled code is cached (``cache=True``) in the user's cache directory, never in
 the source tree, so the package works from a read-only install: unless the user

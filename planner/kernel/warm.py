@@ -3,7 +3,8 @@
 numba compiles one function at a time per process (its compiler lock), and most of a
 compile is numba's own Python (type inference, inlining, lowering), not LLVM: a trial's
 two entries, "plan" (``run.series``, ~17 s CPU) and "predictors" (``dynamics``,
-``servo``, ``rocking``, ~17 s more in the same process), take ~35 s one after the other.
+``servo``, ``rocking``, ``whole_body``, ~21 s more in the same process), take ~39 s one
+after the other.
 ``cache.prepare`` compiles the cold ones of a command's entries at once, one process each
 (``compile_entry``, at most one per core), each writing what it compiles into numba's
 cache, where the command then finds it: on 2 cores the wall time is about the longest
