@@ -17,9 +17,11 @@ from slopewalk.planner.kernel import cache
 def test_the_sweep_estimate_counts_the_analytic_work_per_step(monkeypatch):
     steps, workers = 259_440, 2  # the default sweep's trials
     with_analytic = sweep.first_estimate_s(steps, workers, compile_s=0.0, slowdown=1.0)
+    per_step = sweep.ANALYTIC_S_PER_STEP
+    assert per_step > 0
     monkeypatch.setattr(sweep, "ANALYTIC_S_PER_STEP", 0.0)
     rollout_only = sweep.first_estimate_s(steps, workers, compile_s=0.0, slowdown=1.0)
-    assert with_analytic - rollout_only == pytest.approx(steps * 20e-6 / workers)
+    assert with_analytic - rollout_only == pytest.approx(steps * per_step / workers)
     assert rollout_only == pytest.approx(steps / sweep.ROLLOUT_RATE / workers + 2.5)
 
 

@@ -73,9 +73,11 @@ SORT_LIMIT = 10_000  # sweeps up to this size run longest trial first; larger on
 # The first estimate of a sweep's time (``first_estimate_s``), from run_trial's CPU time on
 # the 2-core machine (trials of 0.3-3 s step time, flat and 10 deg, warm cache, load ~5):
 ROLLOUT_RATE = 60_000.0  # [sim steps/s] per worker: the trial's mujoco.rollout alone
-ANALYTIC_S_PER_STEP = 20e-6  # [s] per sim step: the rest of a trial - the plan, the
-# predictors (servo loop, compliance, tipping), decoding and comparison - all of which
-# scale with the walk's samples (1 ms, as the sim's steps): 37 us a step in all
+ANALYTIC_S_PER_STEP = 31e-6  # [s] per sim step: the rest of a trial - the plan, the
+# predictors (servo loop, compliance, tipping, the whole-body walk), decoding and
+# comparison - all of which scale with the walk's samples (1 ms, as the sim's steps): 48 us
+# a step in all (20 us before the whole-body walk, which added 10.7 us a sample of CPU,
+# 0.42 of predict_trial's, measured on 20 nominal trials at load 3.3, stop 50)
 WORKER_START_S = 2.5  # [s] the workers' imports and cached-kernel loading (their fork server's)
 # [s] per robot: the report a plain ``slopewalk sweep`` (or ``--report``) writes after the
 # trials (``commands._write_claims``: the claims' 13 replays, the GA's best gaits played,
