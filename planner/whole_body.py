@@ -125,16 +125,25 @@ def rotation_stiffness(mass: np.ndarray, arm: np.ndarray, gravity: np.ndarray) -
     return out
 
 
+def _com(plan: Plan, chain: Chain, R: np.ndarray, o: np.ndarray) -> np.ndarray:
+    """Each link's CoM [m] (9, 3, n) (the chain's side by the stance at each sample)."""
+    right = np.asarray(plan.stance).astype(bool)
+    com = np.empty((9, 3, plan.t.size))
+    for side, where in ((0, ~right), (1, right)):
+        com[..., where] = o[:9][..., where] + np.einsum(
+            "kijn,kj->kin", R[:9][..., where], chain.com[side]
+        )
+    return com
+
+
 def _links(plan: Plan, chain: Chain, R: np.ndarray, o: np.ndarray):
     """Each link's CoM [m] (9, 3, n) and inertia about it in S [kg m²] (9, 3, 3, n)."""
     right = np.asarray(plan.stance).astype(bool)
-    com = np.empty((9, 3, plan.t.size))
     inertia = np.empty((9, 3, 3, plan.t.size))
     for side, where in ((0, ~right), (1, right)):
-        c = o[:9] + np.einsum("kijn,kj->kin", R[:9], chain.com[side])
         i = np.einsum("kijn,kjl,kmln->kimn", R[:9], chain.inertia[side], R[:9])
-        com[..., where], inertia[..., where] = c[..., where], i[..., where]
-    return com, inertia
+        inertia[..., where] = i[..., where]
+    return _com(plan, chain, R, o), inertia
 
 
 def _accelerations(plan: Plan, com: np.ndarray) -> np.ndarray:
@@ -278,10 +287,10 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     on the kernel (``kernel.whole_body.mass_and_stiffness``), else their numpy twin."""
     chain = Chain.from_spec(plan.spec)
     R, o = chain.poses(plan.q, plan.stance_sole, plan.stance)
-    com, inertia = _links(plan, chain, R, o)
+    com = _com(plan, chain, R, o)
     axes, origins = _joints(chain, R, o)
     felt = gravity_in_slope(plan.params.slope)[None, :, None] - _accelerations(plan, com)
-    if compiled:
+    if compiled:  # the links' inertia turned into S there too (numpy's einsum: 7 ms a walk)
         from slopewalk.planner.kernel import whole_body
 
         def rows(a):  # the per-sample axis first, contiguous
@@ -289,9 +298,14 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
 
         mass, stiffness = whole_body.mass_and_stiffness(
             np.ascontiguousarray(chain.mass, dtype=float),
-            *(rows(a) for a in (com, inertia, axes, origins, plan.stance_sole.T, felt)),
+            rows(com),
+            rows(R[:9]),
+            np.ascontiguousarray(chain.inertia, dtype=float),
+            np.asarray(plan.stance).astype(bool).astype(np.int64),
+            *(rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
         )
     else:
+        inertia = _links(plan, chain, R, o)[1]
         mass, stiffness = _mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt)
     corner, height, point, turn = _corners(plan, R, o, axes, origins)
     nominal, ideal = _planned_loads(plan)

@@ -512,7 +512,8 @@ def trial_part_figures() -> dict:
     in this process, warm (after one trial), each part timed alone on its own
     CPU clock (``time.process_time``): planning, MuJoCo's playback (the rollout and the
     sensors' decoding), the analytic prediction (``predict_trial``: the servo loop's
-    walk, the compliance fixed point, the predicted events), and the whole trial as a
+    walk, the compliance fixed point, the predicted events; ``whole_body_cpu_ms`` its
+    whole-body walk, timed again alone), and the whole trial as a
     sweep runs it (``run_trial``, the prediction on a thread beside the playback).
     Per trial, in ms; ``prediction_over_playback``: how much the analytic work costs
     against the physics it predicts; ``trial_cpu_fraction_of_raw``: the trials' simulated
@@ -537,7 +538,7 @@ def trial_part_figures() -> dict:
     trials = list(load_sweep().trials)
     first = trials[0]
     run_trial(first.spec, first.trial_spec())  # warm: caches, scenes, the kernel
-    parts = {"plan": 0.0, "playback": 0.0, "rollout": 0.0, "prediction": 0.0, "trial": 0.0}
+    parts = dict.fromkeys(("plan", "playback", "rollout", "prediction", "whole_body", "trial"), 0.0)
     steps, raw_cpu_s = 0, 0.0
 
     def timed(part, fn, *args, **kwargs):
@@ -552,6 +553,7 @@ def trial_part_figures() -> dict:
         played = timed("playback", play, plan, **ground).t.size
         parts["rollout"] += _rollout_alone(plan, **ground)
         timed("prediction", predict_trial, plan, **ground)
+        timed("whole_body", _whole_body_alone, plan, **ground)
         timed("trial", run_trial, t.spec, t.trial_spec())
         raw_cpu_s += played / raw_step_rate(played, 1, clock=time.process_time)
         steps += played
@@ -563,12 +565,24 @@ def trial_part_figures() -> dict:
         "playback_cpu_ms": per["playback"],
         "rollout_cpu_ms": per["rollout"],
         "prediction_cpu_ms": per["prediction"],
+        "whole_body_cpu_ms": per["whole_body"],
         "trial_cpu_ms": per["trial"],
         "worker_trial_cpu_ms": per["worker_trial"],
         "prediction_over_playback": per["prediction"] / per["playback"],
         "trial_cpu_fraction_of_raw": raw_cpu_s / parts["trial"],
         "rollout_cpu_fraction_of_raw": raw_cpu_s / parts["rollout"],
     }
+
+
+def _whole_body_alone(plan, *, friction: float, actuators: str):
+    """The prediction's whole-body walk of a trial worked out afresh (``body_walk``'s, without
+    its once-per-plan memo, which ``predict_trial`` has just filled for this plan)."""
+    from slopewalk.bench.sim.model import scene_xml, servo_settings
+    from slopewalk.bench.sim.prediction import _body_walk, _floor_of
+
+    servo = servo_settings(plan.spec, actuators)
+    xml = scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
+    return _body_walk.__wrapped__(plan, servo, *_floor_of(xml))  # functools.wraps' original
 
 
 def _worker_trials_cpu_s(trials) -> float:

@@ -89,8 +89,8 @@ def _predictors() -> None:
     )  # fmt: skip
     links = np.zeros((n, 9, 3))
     whole_body.mass_and_stiffness(
-        np.ones(9), links, np.zeros((n, 9, 3, 3)), np.zeros((n, 8, 3)), np.zeros((n, 8, 3)),
-        np.zeros((n, 3)), links,
+        np.ones(9), links, np.zeros((n, 9, 3, 3)), np.zeros((2, 9, 3, 3)), stance,
+        np.zeros((n, 8, 3)), np.zeros((n, 8, 3)), np.zeros((n, 3)), links,
     )  # fmt: skip
     row, pair = np.zeros(n), np.zeros((2, n))
     lines = np.array([[-1.0] * n, [1.0] * n])

@@ -187,12 +187,15 @@ def _cross_into(a, b0, b1, b2, out, col):
 
 
 @njit(**_KW)
-def mass_and_stiffness(m, com, inertia, axes, origins, pivot, felt):
+def mass_and_stiffness(m, com, rotation, local_inertia, side, axes, origins, pivot, felt):
     """``whole_body._mass_and_stiffness`` (its numpy twin) per sample: M and the base-turn
     and joint-Hessian stiffness, (n, DOF, DOF) each.
 
     m: the links' masses [kg] (9,); per sample s: com, each link's CoM [m] (n, 9, 3);
-    inertia, about it in the plane's frame [kg m²] (n, 9, 3, 3); axes, origins: joint i's
+    rotation, its frame's axes in the plane's frame (n, 9, 3, 3); local_inertia, each
+    link's inertia about its CoM in its frame [kg m²], chain side first (2, 9, 3, 3), and
+    side, the side at each sample (n,) (turned into the plane's frame here, R I Rᵀ,
+    ``whole_body._links``); axes, origins: joint i's
     axis and a point on it (n, 8, 3); pivot, the stance sole point [m] (n, 3); felt, the
     acceleration each link feels, g − a [m/s²] (n, 9, 3). Link L moves with the base and
     the joints before it: its Jacobians' columns past BASE + L are zero, and skipped.
@@ -204,6 +207,7 @@ def mass_and_stiffness(m, com, inertia, axes, origins, pivot, felt):
     jv = np.zeros((3, dof))
     jw = np.zeros((3, dof))
     spun = np.zeros((3, dof))
+    turned = np.zeros((3, 3))  # the link's inertia in the plane's frame
     inner = np.zeros((3, 1))
     outer = np.zeros((3, 1))
     for s in range(n):
@@ -223,12 +227,18 @@ def mass_and_stiffness(m, com, inertia, axes, origins, pivot, felt):
                 jw[0, BASE + i] = axes[s, i, 0]
                 jw[1, BASE + i] = axes[s, i, 1]
                 jw[2, BASE + i] = axes[s, i, 2]
+            rot, own = rotation[s, link], local_inertia[side[s], link]
+            for a in range(3):
+                for b in range(3):
+                    total = 0.0
+                    for c_ in range(3):
+                        for d in range(3):
+                            total += rot[a, c_] * own[c_, d] * rot[b, d]
+                    turned[a, b] = total
             for a in range(3):
                 for b in range(used):
                     spun[a, b] = (
-                        inertia[s, link, a, 0] * jw[0, b]
-                        + inertia[s, link, a, 1] * jw[1, b]
-                        + inertia[s, link, a, 2] * jw[2, b]
+                        turned[a, 0] * jw[0, b] + turned[a, 1] * jw[1, b] + turned[a, 2] * jw[2, b]
                     )
             for a in range(used):
                 for b in range(a, used):
