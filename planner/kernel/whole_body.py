@@ -187,6 +187,27 @@ def _cross_into(a, b0, b1, b2, out, col):
 
 
 @njit(**_KW)
+def _jacobians(c, pivot, axes, origins, link, jv, jw):
+    """Link ``link``'s CoM ``c`` [m]: its linear and angular Jacobians into ``jv``, ``jw``
+    (3, DOF), their first BASE + link columns (the rest stay zero); returns r = c − pivot."""
+    used = BASE + link
+    r0, r1, r2 = c[0] - pivot[0], c[1] - pivot[1], c[2] - pivot[2]
+    jv[:, :used] = 0.0
+    jw[:, :used] = 0.0
+    jv[2, 0] = 1.0
+    jv[1, 1], jv[2, 1] = -r2, r1  # e_x × r
+    jv[0, 2], jv[2, 2] = r2, -r0  # e_y × r
+    jw[0, 1] = jw[1, 2] = 1.0
+    for i in range(link):
+        o = origins[i]
+        _cross_into(axes[i], c[0] - o[0], c[1] - o[1], c[2] - o[2], jv, BASE + i)
+        jw[0, BASE + i] = axes[i, 0]
+        jw[1, BASE + i] = axes[i, 1]
+        jw[2, BASE + i] = axes[i, 2]
+    return r0, r1, r2
+
+
+@njit(**_KW)
 def mass_and_stiffness(m, com, rotation, local_inertia, side, axes, origins, pivot, felt):
     """``whole_body._mass_and_stiffness`` (its numpy twin) per sample: M and the base-turn
     and joint-Hessian stiffness, (n, DOF, DOF) each.
@@ -213,22 +234,9 @@ def mass_and_stiffness(m, com, rotation, local_inertia, side, axes, origins, piv
     for s in range(n):
         for link in range(links):
             used = BASE + link  # the columns that move it
-            c = com[s, link]
-            r0, r1, r2 = c[0] - pivot[s, 0], c[1] - pivot[s, 1], c[2] - pivot[s, 2]
-            jv[:, :used] = 0.0
-            jw[:, :used] = 0.0
-            jv[2, 0] = 1.0
-            jv[1, 1], jv[2, 1] = -r2, r1  # e_x × r
-            jv[0, 2], jv[2, 2] = r2, -r0  # e_y × r
-            jw[0, 1] = jw[1, 2] = 1.0
-            for i in range(link):
-                o = origins[s, i]
-                _cross_into(axes[s, i], c[0] - o[0], c[1] - o[1], c[2] - o[2], jv, BASE + i)
-                jw[0, BASE + i] = axes[s, i, 0]
-                jw[1, BASE + i] = axes[s, i, 1]
-                jw[2, BASE + i] = axes[s, i, 2]
+            r0, r1, r2 = _jacobians(com[s, link], pivot[s], axes[s], origins[s], link, jv, jw)
             rot, own = rotation[s, link], local_inertia[side[s], link]
-            for a in range(3):
+            for a in range(3):  # R I Rᵀ
                 for b in range(3):
                     total = 0.0
                     for c_ in range(3):
