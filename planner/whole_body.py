@@ -341,9 +341,14 @@ def walk(
     ``compiled``: the model's M and stiffness and the time loop on the kernel
     (``kernel.whole_body``), else their numpy twins (``_integrate`` also where the kernel
     meets a singular system)."""
-    for name, value in (("corner_stiffness", corner_stiffness), ("contact_time", contact_time)):
-        if not (np.isfinite(value) and value > 0):
-            raise SlopewalkError(f"{name} {value!r}: must be finite and > 0")
+    for name, value in (
+        ("stiffness", stiffness),
+        ("force_limit", force_limit),
+        ("corner_stiffness", corner_stiffness),
+        ("contact_time", contact_time),
+    ):
+        if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value > 0):
+            raise SlopewalkError(f"whole_body.walk: {name} {value!r}: must be finite and > 0")
     model = model_of(plan, compiled=compiled)
     both = plan.double_support
     tau, _, gravity_k, velocity_c, jac = _loop_model(plan, both, True)

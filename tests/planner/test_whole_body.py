@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from slopewalk.planner import whole_body as wb
+from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.servo_loop import _plan_linearisation
@@ -144,3 +145,13 @@ def test_the_compiled_model_is_its_numpy_twin(spec):
     for a, b in ((mine.mass, numpy.mass), (mine.stiffness, numpy.stiffness)):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
         np.testing.assert_allclose(a, a.transpose(0, 2, 1), rtol=0, atol=1e-12 * np.abs(b).max())
+
+
+@pytest.mark.parametrize("name", ["stiffness", "force_limit", "corner_stiffness", "contact_time"])
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "6707"])
+def test_a_bad_setting_is_one_error_naming_it(slow_walk, name, value):
+    settings = _settings(slow_walk, feedforward=False) | {name: value}
+    with pytest.raises(SlopewalkError) as err:
+        wb.walk(slow_walk, **settings)
+    message = str(err.value)
+    assert f"{name} {value!r}" in message and "\n" not in message
