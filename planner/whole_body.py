@@ -49,6 +49,7 @@ import numpy as np
 from slopewalk.planner.compliance import torque_at_rest
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.kinematics import GRAVITY, Chain, gravity_in_slope
+from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import _loop_model, _settled_offset
 from slopewalk.planner.verdict import LOADED_FRACTION, TIP_ANGLE
@@ -312,6 +313,14 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     return Model(mass, stiffness, corner, height, nominal, ideal, point, turn)
 
 
+@once_per_plan
+def _plan_model(plan: Plan) -> Model:
+    """``model_of`` on the kernel, once per plan object (``per_plan``: it depends on the plan
+    alone, so a sweep's trials of one plan in several actuator modes share it; ~12 MB for a
+    4.4 s walk, let go with the plan)."""
+    return model_of(plan)
+
+
 @dataclass(frozen=True)
 class _Loop:
     """The servo loop along the plan, as ``servo_loop`` linearises it (joint rows)."""
@@ -349,7 +358,7 @@ def walk(
     ):
         if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value > 0):
             raise SlopewalkError(f"whole_body.walk: {name} {value!r}: must be finite and > 0")
-    model = model_of(plan, compiled=compiled)
+    model = _plan_model(plan) if compiled else model_of(plan, compiled=False)
     both = plan.double_support
     tau, _, gravity_k, velocity_c, jac = _loop_model(plan, both, True)
     ff = np.zeros_like(plan.q) if feedforward is None else np.asarray(feedforward, float)

@@ -35,3 +35,22 @@ def test_trials_on_one_plan_object_predict_as_trials_on_fresh_plans(spec, actuat
         _same(got[friction], fresh)
     # a noise replica (the same plan, μ and mode) is given the prediction already made
     assert predict_trial(shared, friction=1.0, actuators=actuators) is got[1.0]
+
+
+def test_trials_of_one_plan_in_several_modes_predict_as_on_fresh_plans(spec):
+    """The whole-body model depends on the plan alone and is made once per plan object
+    (``whole_body._plan_model``): each mode's walk on it, after the other modes', is the walk
+    a fresh plan gives."""
+    from slopewalk.bench.sim.prediction import body_walk
+
+    gait = GaitParams.nominal(spec, 0.75, slope=np.deg2rad(10.0), steps=2)
+    shared = plan_walk(spec, gait)
+    for actuators in ("servo", "stiff_ff", "servo_ff"):
+        _same(
+            predict_trial(shared, friction=1.0, actuators=actuators),
+            predict_trial(plan_walk(spec, gait), friction=1.0, actuators=actuators),
+        )
+        mine = body_walk(shared, friction=1.0, actuators=actuators)
+        fresh = body_walk(plan_walk(spec, gait), friction=1.0, actuators=actuators)
+        np.testing.assert_array_equal(mine.x, fresh.x)
+        np.testing.assert_array_equal(mine.force, fresh.force)
