@@ -60,27 +60,33 @@ def _swapped(point, turn, y):
 
 @njit(**_KW)
 def _add_outer(matrix, row, scale):
-    """matrix += scale · row rowᵀ."""
+    """matrix += scale · row rowᵀ, skipping the row's zeros (a stance corner moves with the
+    base's 3 coordinates only: 9 of its 121 products are not zero)."""
     for i in range(row.shape[0]):
+        if row[i] == 0.0:
+            continue
         for j in range(row.shape[0]):
-            matrix[i, j] += scale * row[i] * row[j]
+            if row[j] != 0.0:
+                matrix[i, j] += scale * row[i] * row[j]
 
 
 @njit(**_KW)
-def _joint_rows(k, x, v, mass, stiffness, need, gravity_k, velocity_c, ff, qd, single, gains):
-    """The step's M, C, K and force without the ground (``whole_body._step``'s first half)."""
+def _joint_rows(k, x, v, mass, stiffness, loop, gains, work):
+    """The step's M, C, K and force without the ground (``whole_body._step``'s first half),
+    into ``work``'s m, c, stiff and force."""
+    need, gravity_k, velocity_c, ff, qd, single = loop
     kp, kv, damping, armature, limit = gains
-    dof = x.shape[0]
-    m = mass[k].copy()
-    c = np.zeros((dof, dof))
-    stiff = stiffness[k].copy()
-    force = np.zeros(dof)
-    for i in range(dof - BASE):
+    m, c, stiff, force = work[0], work[1], work[2], work[3]
+    m[:, :] = mass[k]
+    c[:, :] = 0.0
+    stiff[:, :] = stiffness[k]
+    force[:] = 0.0
+    for i in range(x.shape[0] - BASE):
         r = BASE + i
         m[r, r] += armature
-        for j in range(dof - BASE):
+        for j in range(x.shape[0] - BASE):
             c[r, BASE + j] = velocity_c[k, i, j]
-            if single:  # the loop's exact linearisation
+            if single[k]:  # the loop's exact linearisation
                 stiff[r, BASE + j] = gravity_k[k, i, j]
         raw = -kp * x[r] - kv * (qd[k, i] + v[r]) + ff[k, i]
         free = abs(raw) <= limit
@@ -88,25 +94,27 @@ def _joint_rows(k, x, v, mass, stiffness, need, gravity_k, velocity_c, ff, qd, s
         stiff[r, r] += kp if free else 0.0
         held = 0.0 if free else min(max(raw, -limit), limit)
         force[r] = held + ((ff[k, i] - kv * qd[k, i]) if free else 0.0) - need[k, i]
-    return m, c, stiff, force
 
 
 @njit(**_KW)
-def _step(k, h, x, v, anchor, model, loop, gains, floor, forces):
-    """One backward-Euler step at sample k (``whole_body._step``): x', v', the second sole's
-    anchor along the plane (nan: not held), whether the system was regular; the corners'
-    loads into ``forces[k]``."""
+def _step(k, h, x, v, anchor, model, loop, gains, floor, forces, work):
+    """One backward-Euler step at sample k (``whole_body._step``): x and v advanced in place;
+    returns the second sole's anchor along the plane (nan: not held) and whether the system
+    was regular; the corners' loads into ``forces[k]``. ``work``: the step's arrays, made
+    once per walk (a step's own ~25 small arrays took half its time)."""
     mass, stiffness, corner, height, nominal, ideal, point = model
-    need, gravity_k, velocity_c, ff, qd, single = loop
     k_c, c_c, tangent = floor
     dof = x.shape[0]
-    m, c, stiff, force = _joint_rows(
-        k, x, v, mass, stiffness, need, gravity_k, velocity_c, ff, qd, single[k], gains
-    )
+    _joint_rows(k, x, v, mass, stiffness, loop, gains, work)
+    m, c, stiff, force = work[0], work[1], work[2], work[3]
+    lhs, ahead, after = work[4], work[5], work[6]
+    moved, rhs, cv, kx = work[7], work[8], work[9], work[10]
     for j in range(dof):
         for cr in range(8):
             force[j] -= corner[k, cr, j] * ideal[k, cr]
-    ahead = _pushes(corner[k], height[k], nominal[k], k_c, c_c, x + h * v, v, np.empty(8))
+    for j in range(dof):
+        moved[j] = x[j] + h * v[j]
+    _pushes(corner[k], height[k], nominal[k], k_c, c_c, moved, v, ahead)
     second = False
     for cr in range(8):
         if ahead[cr] > 0:
@@ -128,15 +136,22 @@ def _step(k, h, x, v, anchor, model, loop, gains, floor, forces):
             force[j] += along[j] * tangent * k_c * anchor
     else:
         anchor = np.nan
-    lhs = m + h * c + h * h * stiff
-    rhs = force - servo._mv(c, v, np.empty(dof)) - servo._mv(stiff, x + h * v, np.empty(dof))
+    for i in range(dof):
+        for j in range(dof):
+            lhs[i, j] = m[i, j] + h * c[i, j] + h * h * stiff[i, j]
+    servo._mv(c, v, cv)
+    servo._mv(stiff, moved, kx)
+    for j in range(dof):
+        rhs[j] = force[j] - cv[j] - kx[j]
     a, regular = servo._solve(lhs, rhs)
-    v = v + h * a
-    x = x + h * v
-    after = _pushes(corner[k], height[k], nominal[k], k_c, c_c, x, v, np.empty(8))
+    for j in range(dof):
+        v[j] = v[j] + h * a[j]
+    for j in range(dof):
+        x[j] = x[j] + h * v[j]
+    _pushes(corner[k], height[k], nominal[k], k_c, c_c, x, v, after)
     for cr in range(8):
         forces[k, cr] = max(after[cr], 0.0) if ahead[cr] > 0 else 0.0
-    return x, v, anchor, regular
+    return anchor, regular
 
 
 @njit(**_KW)
@@ -159,13 +174,19 @@ def integrate(
     x, v, anchor = start.copy(), np.zeros(dof), np.nan
     model = (mass, stiffness, corner, height, nominal, ideal, second_point)
     loop = (need, gravity_k, velocity_c, ff, qd, ~double_support)
+    square, row, corners = np.zeros((4, dof, dof)), np.zeros((5, dof)), np.zeros((2, 8))
+    # m, c, K, force, lhs, the corners' pushes ahead and after, x + h v, rhs, C v, K (x + h v)
+    work = (
+        square[0], square[1], square[2], row[0], square[3], corners[0], corners[1],
+        row[1], row[2], row[3], row[4],
+    )  # fmt: skip
     for k in range(n):
         if k > 0 and stance[k] != stance[k - 1]:
             x = _swapped(second_point[k - 1], second_turn[k - 1], x)
             v = _swapped(second_point[k - 1], second_turn[k - 1], v)
             anchor = np.nan
         if dt[k] > 0:
-            x, v, anchor, regular = _step(k, dt[k], x, v, anchor, model, loop, gains, floor, forces)
+            anchor, regular = _step(k, dt[k], x, v, anchor, model, loop, gains, floor, forces, work)
             if not regular:
                 return states, forces, False
         states[k] = x
