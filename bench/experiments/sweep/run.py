@@ -120,7 +120,8 @@ def first_estimate_s(
 
 # plans a worker keeps (``plan_of``): its group's. With a plan go its per-plan results
 # (``planner/per_plan.py``): for a 4,400-sample walk (4 steps of 1 s) the plan 2.8 MB, the
-# loop's linearisation 8.2 MB, and 6.2 MB per friction and mode predicted on it
+# loop's linearisation 8.2 MB, the whole-body model 14.8 MB, 6.2 MB per friction and mode
+# predicted on it, and the whole-body walk's 0.8 MB per mode
 PLANS_KEPT = 1
 
 
