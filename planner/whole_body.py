@@ -292,18 +292,16 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     axes, origins = _joints(chain, R, o)
     felt = gravity_in_slope(plan.params.slope)[None, :, None] - _accelerations(plan, com)
     if compiled:  # the links' inertia turned into S there too (numpy's einsum: 7 ms a walk)
-        from slopewalk.planner.kernel import whole_body
+        from slopewalk.planner.kernel import cache, whole_body
 
-        def rows(a):  # the per-sample axis first, contiguous
-            return np.ascontiguousarray(np.moveaxis(a, -1, 0), dtype=float)
-
+        cache.first_use("predictors")  # the walk's first kernel call
         mass, stiffness = whole_body.mass_and_stiffness(
             np.ascontiguousarray(chain.mass, dtype=float),
-            rows(com),
-            rows(R[:9]),
+            _rows(com),
+            _rows(R[:9]),
             np.ascontiguousarray(chain.inertia, dtype=float),
             np.asarray(plan.stance).astype(bool).astype(np.int64),
-            *(rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
+            *(_rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
         )
     else:
         inertia = _links(plan, chain, R, o)[1]
@@ -311,6 +309,11 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     corner, height, point, turn = _corners(plan, R, o, axes, origins)
     nominal, ideal = _planned_loads(plan)
     return Model(mass, stiffness, corner, height, nominal, ideal, point, turn)
+
+
+def _rows(a: np.ndarray) -> np.ndarray:
+    """``a`` with its per-sample (last) axis first, contiguous: the kernel's layout."""
+    return np.ascontiguousarray(np.moveaxis(a, -1, 0), dtype=float)
 
 
 @once_per_plan
@@ -406,23 +409,15 @@ def _integrate(plan: Plan, model: Model, loop: _Loop, floor: tuple, start: np.nd
 
 def _integrate_compiled(plan: Plan, model: Model, loop: _Loop, floor: tuple, start: np.ndarray):
     """``_integrate`` on the compiled kernel (``kernel.whole_body.integrate``); None where it
-    met a singular system."""
-    from slopewalk.planner.kernel import cache, whole_body
-
-    cache.first_use("predictors")
-
-    def rows(a):  # the per-sample axis first, contiguous
-        return np.ascontiguousarray(np.moveaxis(a, -1, 0), dtype=float)
+    met a singular system (``model_of`` has said the kernel's first use)."""
+    from slopewalk.planner.kernel import whole_body
 
     states, forces, regular = whole_body.integrate(
         np.ascontiguousarray(model.mass),
         np.ascontiguousarray(model.stiffness),
-        rows(model.corner),
-        rows(model.height),
-        rows(model.nominal),
-        rows(model.ideal),
-        rows(model.second_point),
-        rows(model.second_turn),
+        *(_rows(a) for a in (model.corner, model.height, model.nominal, model.ideal)),
+        _rows(model.second_point),
+        _rows(model.second_turn),
         *(np.ascontiguousarray(a, dtype=float) for a in (loop.need, loop.gravity_k)),
         *(np.ascontiguousarray(a, dtype=float) for a in (loop.velocity_c, loop.feedforward)),
         np.ascontiguousarray(plan.qd, dtype=float),

@@ -579,14 +579,14 @@ def _whole_body_alone(plan, *, friction: float, actuators: str):
     pays it: its model (``whole_body.model_of``) and the walk (``body_walk``'s, without its
     once-per-plan memo, which ``predict_trial`` has just filled for this plan; the walk
     then reads the model memoised for the plan, made again here)."""
-    from slopewalk.bench.sim.model import scene_xml, servo_settings
-    from slopewalk.bench.sim.prediction import _body_walk, _floor_of
+    from slopewalk.bench.sim.model import servo_settings
+    from slopewalk.bench.sim.prediction import _body_walk, trial_floor
     from slopewalk.planner.whole_body import model_of
 
     model_of(plan)
+    floor = trial_floor(plan, friction=friction, actuators=actuators)
     servo = servo_settings(plan.spec, actuators)
-    xml = scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
-    return _body_walk.__wrapped__(plan, servo, *_floor_of(xml))  # functools.wraps' original
+    return _body_walk.__wrapped__(plan, servo, *floor)  # functools.wraps' original
 
 
 def _worker_trials_cpu_s(trials) -> float:

@@ -98,9 +98,7 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
     loop_walk = servo_walk(
         plan, force_limit=servo.force_limit, friction=friction, open_chain_too=True, **loop
     )
-    floor_stiffness, contact_time = _floor_of(
-        scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
-    )
+    floor_stiffness, contact_time = trial_floor(plan, friction=friction, actuators=actuators)
     body = _body_walk(plan, servo, floor_stiffness, contact_time)
     prediction = predict(
         plan,
@@ -126,9 +124,16 @@ def body_walk(plan: Plan, *, friction: float, actuators: str) -> Walk:
     """The whole-body walk (``planner/whole_body.py``) of ``plan`` played with ``actuators``
     on the trial's floor (its scene's corner stiffness and contact time), as the
     prediction makes it."""
-    servo = servo_settings(plan.spec, actuators)
-    xml = scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
-    return _body_walk(plan, servo, *_floor_of(xml))
+    floor = trial_floor(plan, friction=friction, actuators=actuators)
+    return _body_walk(plan, servo_settings(plan.spec, actuators), *floor)
+
+
+def trial_floor(plan: Plan, *, friction: float, actuators: str) -> tuple[float, float]:
+    """The floor of the trial's scene: its corner stiffness [N/m] and contact time [s]
+    (``_floor_of``)."""
+    return _floor_of(
+        scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
+    )
 
 
 @once_per_plan
