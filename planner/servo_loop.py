@@ -332,10 +332,6 @@ def servo_walk(
     if open_chain_too:
         never = np.zeros_like(both)
         opened = -_loop(plan, model, never, gains, settle, compiled)[0]
-    if compiled:
-        from slopewalk.planner.kernel import cache
-
-        cache.compiled("predictors")
     return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held, opened)
 
 

@@ -111,6 +111,11 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
         ring_settle=_ring_settle(plan, servo),
         body_tip=tip_time(plan, body),
     )
+    from slopewalk.planner.kernel import cache
+
+    # the entry's last kernel call made (``predict``'s rocking): marked warm only now, so a
+    # process stopped before it leaves the entry cold and the next run says so
+    cache.compiled("predictors")
     return TrialPrediction(
         paper_verdict="stable" if plan.stable else "zmp_outside",
         compliant_verdict="stable" if walk.converged and walk.plan.stable else "zmp_outside",

@@ -54,3 +54,32 @@ def test_trials_of_one_plan_in_several_modes_predict_as_on_fresh_plans(spec):
         fresh = body_walk(plan_walk(spec, gait), friction=1.0, actuators=actuators)
         np.testing.assert_array_equal(mine.x, fresh.x)
         np.testing.assert_array_equal(mine.force, fresh.force)
+
+
+def test_a_trial_marks_its_predictors_compiled_after_their_last_kernel_call(spec, monkeypatch):
+    """The "predictors" entry is marked warm (``cache.compiled``) once every one of its
+    kernel modules has been called: a process stopped between a mark and a later module's
+    first compile would leave that module cold under a warm mark, and the next run would
+    compile it without the notice line."""
+    import numba
+
+    from slopewalk.planner.kernel import cache, dynamics, rocking, servo, whole_body
+
+    calls = []
+    for module in (dynamics, servo, rocking, whole_body):
+        for name, f in vars(module).items():
+            if isinstance(f, numba.core.registry.CPUDispatcher):
+
+                def logged(*args, _f=f, _name=f"{module.__name__}.{name}", **kw):
+                    calls.append(_name)
+                    return _f(*args, **kw)
+
+                monkeypatch.setattr(module, name, logged)
+    marks = []
+    monkeypatch.setattr(cache, "compiled", lambda entry: marks.append((entry, len(calls))))
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=0.0, steps=2))
+    predict_trial(plan, friction=1.0, actuators="servo")
+    called = {c.rsplit(".", 2)[-2] for c in calls}
+    assert called == {"dynamics", "servo", "rocking", "whole_body"}  # the entry's modules
+    mark = [at for entry, at in marks if entry == "predictors"]
+    assert mark == [len(calls)]  # marked once, with no kernel call after it
