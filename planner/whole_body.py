@@ -184,6 +184,19 @@ def _point_jacobian(point: np.ndarray, pivot: np.ndarray, axes, origins, joints)
     return jac
 
 
+def _heights_jacobian(points: np.ndarray, pivot: np.ndarray, axes, origins) -> np.ndarray:
+    """∂z/∂x (8, DOF, n) of the 8 sole corners ``points`` (8, 3, n): the z row of
+    ``_point_jacobian`` for all of them at once, the stance sole's (0-3) moved by the base
+    alone, the second sole's (4-7) by the joints too (the z of axis_i × (p − o_i))."""
+    r = points - pivot[None]
+    jac = np.zeros((8, DOF, points.shape[-1]))
+    jac[:, 0] = 1.0
+    jac[:, 1], jac[:, 2] = r[:, 1], -r[:, 0]  # (e_x × r)_z, (e_y × r)_z
+    arm = points[4:, None] - origins[None]  # (4, 8, 3, n)
+    jac[4:, BASE:] = axes[None, :, 0] * arm[:, :, 1] - axes[None, :, 1] * arm[:, :, 0]
+    return jac
+
+
 def _mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt):
     """M (n, DOF, DOF) and the base-turn and joint-Hessian stiffness (n, DOF, DOF); ``felt``
     the acceleration each link feels, g − a [m/s²] (9, 3, n)."""
@@ -235,12 +248,7 @@ def _corners(plan, R, o, axes, origins):
     offset[:, 0] = along
     offset[:, 1] = spec.sole_shift(1 - plan.stance) + across
     points[4:] = o[9][None] + np.einsum("ijn,cjn->cin", R[9], offset)
-    corner = np.stack(
-        [
-            _point_jacobian(points[c], pivot, axes, origins, range(8) if c >= 4 else ())[2]
-            for c in range(8)
-        ]
-    )
+    corner = _heights_jacobian(points, pivot, axes, origins)
     height = np.zeros((8, n))
     height[4:] = np.where(plan.double_support, 0.0, np.maximum(points[4:, 2], 0.0))
     turn = np.zeros((3, DOF, n))
