@@ -59,6 +59,71 @@ def test_a_point_mass_beside_the_pivot_couples_roll_and_pitch_only_through_gravi
     np.testing.assert_allclose(k, want, atol=1e-12)
 
 
+def _potential(plan, chain, felt, k, x):
+    """V = −Σ m g'·c [J] of the robot at sample k moved by x (z, roll, pitch as a rotation
+    vector about the stance sole point, the 8 joints' angles), from the chain's forward
+    kinematics alone; g' (9, 3) per link."""
+    from scipy.spatial.transform import Rotation
+
+    q = plan.q[k : k + 1] + x[None, wb.BASE :]
+    R, o = chain.poses(q, plan.stance_sole[k : k + 1], plan.stance[k : k + 1])
+    side = int(plan.stance[k])
+    c = o[:9, :, 0] + np.einsum("kij,kj->ki", R[:9, :, :, 0], chain.com[side])
+    pivot = plan.stance_sole[k]
+    turn = Rotation.from_rotvec([x[1], x[2], 0.0]).as_matrix()
+    c = (c - pivot) @ turn.T + pivot + np.array([0.0, 0.0, x[0]])
+    return -(chain.mass * (felt * c).sum(axis=1)).sum()
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_its_stiffness_is_the_potentials_hessian(spec, compiled):
+    """The base turn's stiffness, its coupling to the joints and the joints' Hessian, against
+    central differences of V = −Σ m g'·c through the forward kinematics, with a g' of its
+    own for each link (gravity plus a d'Alembert pull), in double and in single support."""
+    from slopewalk.planner.kernel import whole_body as kernel
+    from slopewalk.planner.kinematics import Chain
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
+    chain = Chain.from_spec(spec)
+    R, o = chain.poses(plan.q, plan.stance_sole, plan.stance)
+    com, inertia = wb._links(plan, chain, R, o)
+    axes, origins = wb._joints(chain, R, o)
+    pull = np.random.default_rng(0).normal(0.0, 5.0, (9, 3)) + [0.0, 0.0, -9.81]
+    felt = np.repeat(pull[..., None], plan.t.size, axis=2)
+    if compiled:
+        _, stiffness = kernel.mass_and_stiffness(
+            np.ascontiguousarray(chain.mass, dtype=float),
+            wb._rows(com),
+            wb._rows(R[:9]),
+            np.ascontiguousarray(chain.inertia, dtype=float),
+            np.asarray(plan.stance).astype(np.int64),
+            *(wb._rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
+        )
+    else:
+        stiffness = wb._mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt)[1]
+    h, step = 1e-4, np.eye(wb.DOF) * 1e-4
+    for k in (
+        int(np.flatnonzero(plan.double_support)[5]),
+        int(np.flatnonzero(~plan.double_support)[300]),
+    ):
+        hessian = np.array(
+            [
+                [
+                    sum(
+                        si * sj * _potential(plan, chain, pull, k, si * step[i] + sj * step[j])
+                        for si in (1, -1)
+                        for sj in (1, -1)
+                    )
+                    / (4 * h * h)
+                    for j in range(wb.DOF)
+                ]
+                for i in range(wb.DOF)
+            ]
+        )
+        scale = np.abs(hessian).max()
+        np.testing.assert_allclose(stiffness[k], hessian, rtol=0, atol=1e-6 * scale)
+
+
 def test_the_planned_loads_carry_the_planned_force_at_the_planned_zmp(spec):
     """The corners' ideal loads add up to the planned normal force, and their moment puts it
     at the planned ZMP; clamped to the soles they are never negative."""
