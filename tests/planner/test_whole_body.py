@@ -59,10 +59,10 @@ def test_a_point_mass_beside_the_pivot_couples_roll_and_pitch_only_through_gravi
     np.testing.assert_allclose(k, want, atol=1e-12)
 
 
-def _potential(plan, chain, felt, k, x):
-    """V = −Σ m g'·c [J] of the robot at sample k moved by x (z, roll, pitch as a rotation
-    vector about the stance sole point, the 8 joints' angles), from the chain's forward
-    kinematics alone; g' (9, 3) per link."""
+def _moved(plan, chain, k, x):
+    """The links' CoMs [m] (9, 3) and frames (9, 3, 3) in S at sample k moved by x (z, roll,
+    pitch as a rotation vector about the stance sole point, the 8 joints' angles), from the
+    chain's forward kinematics alone."""
     from scipy.spatial.transform import Rotation
 
     q = plan.q[k : k + 1] + x[None, wb.BASE :]
@@ -71,8 +71,12 @@ def _potential(plan, chain, felt, k, x):
     c = o[:9, :, 0] + np.einsum("kij,kj->ki", R[:9, :, :, 0], chain.com[side])
     pivot = plan.stance_sole[k]
     turn = Rotation.from_rotvec([x[1], x[2], 0.0]).as_matrix()
-    c = (c - pivot) @ turn.T + pivot + np.array([0.0, 0.0, x[0]])
-    return -(chain.mass * (felt * c).sum(axis=1)).sum()
+    return (c - pivot) @ turn.T + pivot + np.array([0.0, 0.0, x[0]]), turn @ R[:9, :, :, 0]
+
+
+def _potential(plan, chain, felt, k, x):
+    """V = −Σ m g'·c [J] at sample k moved by x (``_moved``); g' (9, 3) per link."""
+    return -(chain.mass * (felt * _moved(plan, chain, k, x)[0]).sum(axis=1)).sum()
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -122,6 +126,37 @@ def test_its_stiffness_is_the_potentials_hessian(spec, compiled):
         )
         scale = np.abs(hessian).max()
         np.testing.assert_allclose(stiffness[k], hessian, rtol=0, atol=1e-6 * scale)
+
+
+def test_its_mass_matrix_is_the_kinetic_energys(spec):
+    """M = Σ m Jvᵀ Jv + Jωᵀ I Jω with each link's Jacobians taken by central differences of
+    its CoM and frame through the forward kinematics (ω from Ṙ Rᵀ, I = R I_link Rᵀ), every
+    row (the base's turn and its coupling to the joints included), in double and single
+    support."""
+    from slopewalk.planner.kinematics import Chain
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
+    chain = Chain.from_spec(spec)
+    mass = wb.model_of(plan).mass
+    h = 1e-6
+    for k in (
+        int(np.flatnonzero(plan.double_support)[5]),
+        int(np.flatnonzero(~plan.double_support)[300]),
+    ):
+        c, frame = _moved(plan, chain, k, np.zeros(wb.DOF))
+        jv, jw = np.zeros((9, 3, wb.DOF)), np.zeros((9, 3, wb.DOF))
+        for i in range(wb.DOF):
+            step = np.eye(wb.DOF)[i] * h
+            (up, turned_up), (down, turned_down) = (
+                _moved(plan, chain, k, s) for s in (step, -step)
+            )
+            jv[:, :, i] = (up - down) / (2 * h)
+            spin = (turned_up - turned_down) / (2 * h) @ frame.transpose(0, 2, 1)  # [ω]×
+            jw[:, :, i] = np.stack([spin[:, 2, 1], spin[:, 0, 2], spin[:, 1, 0]], axis=1)
+        inertia = frame @ chain.inertia[int(plan.stance[k])] @ frame.transpose(0, 2, 1)
+        want = np.einsum("k,kai,kaj->ij", chain.mass, jv, jv)
+        want += np.einsum("kai,kab,kbj->ij", jw, inertia, jw)
+        np.testing.assert_allclose(mass[k], want, rtol=0, atol=1e-6 * np.abs(want).max())
 
 
 def test_the_planned_loads_carry_the_planned_force_at_the_planned_zmp(spec):
