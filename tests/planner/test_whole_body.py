@@ -59,19 +59,33 @@ def test_a_point_mass_beside_the_pivot_couples_roll_and_pitch_only_through_gravi
     np.testing.assert_allclose(k, want, atol=1e-12)
 
 
-def _moved(plan, chain, k, x):
+def _moved(plan, chain, k, x, *, soles=False):
     """The links' CoMs [m] (9, 3) and frames (9, 3, 3) in S at sample k moved by x (z, roll,
     pitch as a rotation vector about the stance sole point, the 8 joints' angles), from the
-    chain's forward kinematics alone."""
+    chain's forward kinematics alone; ``soles``: instead the 8 sole corners (stance 0-3,
+    second 4-7) [m] (8, 3), the second sole point (3,) and its frame (3, 3)."""
     from scipy.spatial.transform import Rotation
 
     q = plan.q[k : k + 1] + x[None, wb.BASE :]
     R, o = chain.poses(q, plan.stance_sole[k : k + 1], plan.stance[k : k + 1])
     side = int(plan.stance[k])
-    c = o[:9, :, 0] + np.einsum("kij,kj->ki", R[:9, :, :, 0], chain.com[side])
     pivot = plan.stance_sole[k]
     turn = Rotation.from_rotvec([x[1], x[2], 0.0]).as_matrix()
-    return (c - pivot) @ turn.T + pivot + np.array([0.0, 0.0, x[0]]), turn @ R[:9, :, :, 0]
+
+    def moved(p):
+        return (p - pivot) @ turn.T + pivot + np.array([0.0, 0.0, x[0]])
+
+    if soles:
+        spec = plan.spec
+        heel, toe, half = spec.heel_offset, spec.ankle_to_toe, spec.foot_width / 2
+        along, across = np.array([-heel, toe, toe, -heel]), np.array([-half, -half, half, half])
+        stance = pivot + np.stack([along, spec.sole_shift(side) + across, 0 * along], axis=1)
+        offset = np.stack([along, spec.sole_shift(1 - side) + across, 0 * along], axis=1)
+        second = o[9, :, 0] + offset @ R[9, :, :, 0].T
+        corners = np.concatenate([stance, second])
+        return moved(corners), moved(o[9, :, 0]), turn @ R[9, :, :, 0]
+    c = o[:9, :, 0] + np.einsum("kij,kj->ki", R[:9, :, :, 0], chain.com[side])
+    return moved(c), turn @ R[:9, :, :, 0]
 
 
 def _potential(plan, chain, felt, k, x):
@@ -157,6 +171,35 @@ def test_its_mass_matrix_is_the_kinetic_energys(spec):
         want = np.einsum("k,kai,kaj->ij", chain.mass, jv, jv)
         want += np.einsum("kai,kab,kbj->ij", jw, inertia, jw)
         np.testing.assert_allclose(mass[k], want, rtol=0, atol=1e-6 * np.abs(want).max())
+
+
+def test_its_sole_jacobians_are_the_forward_kinematics(spec):
+    """The corners' ∂z/∂x, the second sole point's ∂p/∂x and the second sole's ∂θ/∂x (θ from
+    Ṙ Rᵀ), against central differences through the forward kinematics, in double and single
+    support; and the corners' planned heights (the swing sole's off the plane)."""
+    from slopewalk.planner.kinematics import Chain
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
+    chain = Chain.from_spec(spec)
+    model = wb.model_of(plan)
+    h = 1e-6
+    for k in (
+        int(np.flatnonzero(plan.double_support)[5]),
+        int(np.flatnonzero(~plan.double_support)[300]),
+    ):
+        corners, _, frame = _moved(plan, chain, k, np.zeros(wb.DOF), soles=True)
+        height = np.where(plan.double_support[k], 0.0, np.maximum(corners[4:, 2], 0.0))
+        np.testing.assert_allclose(model.height[4:, k], height, rtol=0, atol=1e-12)
+        jz, jp, jt = np.zeros((8, wb.DOF)), np.zeros((3, wb.DOF)), np.zeros((3, wb.DOF))
+        for i in range(wb.DOF):
+            step = np.eye(wb.DOF)[i] * h
+            up, down = (_moved(plan, chain, k, s, soles=True) for s in (step, -step))
+            jz[:, i] = (up[0][:, 2] - down[0][:, 2]) / (2 * h)
+            jp[:, i] = (up[1] - down[1]) / (2 * h)
+            spin = (up[2] - down[2]) / (2 * h) @ frame.T  # [ω]×
+            jt[:, i] = spin[2, 1], spin[0, 2], spin[1, 0]
+        for mine, want in ((model.corner, jz), (model.second_point, jp), (model.second_turn, jt)):
+            np.testing.assert_allclose(mine[..., k], want, rtol=0, atol=1e-6)
 
 
 def test_the_planned_loads_carry_the_planned_force_at_the_planned_zmp(spec):
