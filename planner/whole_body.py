@@ -233,6 +233,22 @@ def _mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt):
     return mass, stiffness
 
 
+def _mass_and_stiffness_compiled(plan, chain, R, com, axes, origins, felt):
+    """``_mass_and_stiffness`` on the kernel (``kernel.whole_body.mass_and_stiffness``), from
+    the links' frames ``R`` (10, 3, 3, n), which it turns their inertia with (numpy's einsum
+    for that: 7 ms a walk)."""
+    from slopewalk.planner.kernel import whole_body
+
+    return whole_body.mass_and_stiffness(
+        np.ascontiguousarray(chain.mass, dtype=float),
+        _rows(com),
+        _rows(R[:9]),
+        np.ascontiguousarray(chain.inertia, dtype=float),
+        np.asarray(plan.stance).astype(bool).astype(np.int64),
+        *(_rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
+    )
+
+
 def _corners(plan, R, o, axes, origins):
     """The 8 corners' ∂z/∂x (8, DOF, n) and planned heights (8, n); the second sole point's
     ∂p/∂x and the second sole's ∂θ/∂x (3, DOF, n) each."""
@@ -299,18 +315,11 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     com = _com(plan, chain, R, o)
     axes, origins = _joints(chain, R, o)
     felt = gravity_in_slope(plan.params.slope)[None, :, None] - _accelerations(plan, com)
-    if compiled:  # the links' inertia turned into S there too (numpy's einsum: 7 ms a walk)
-        from slopewalk.planner.kernel import cache, whole_body
+    if compiled:
+        from slopewalk.planner.kernel import cache
 
         cache.first_use("predictors")  # the walk's first kernel call
-        mass, stiffness = whole_body.mass_and_stiffness(
-            np.ascontiguousarray(chain.mass, dtype=float),
-            _rows(com),
-            _rows(R[:9]),
-            np.ascontiguousarray(chain.inertia, dtype=float),
-            np.asarray(plan.stance).astype(bool).astype(np.int64),
-            *(_rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
-        )
+        mass, stiffness = _mass_and_stiffness_compiled(plan, chain, R, com, axes, origins, felt)
     else:
         inertia = _links(plan, chain, R, o)[1]
         mass, stiffness = _mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt)

@@ -59,6 +59,29 @@ def test_a_point_mass_beside_the_pivot_couples_roll_and_pitch_only_through_gravi
     np.testing.assert_allclose(k, want, atol=1e-12)
 
 
+@pytest.fixture(scope="module")
+def short_walk(spec):
+    """Two 1 s steps up 10°, and its chain: the finite-difference tests' walk."""
+    from slopewalk.planner.kinematics import Chain
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
+    return plan, Chain.from_spec(spec)
+
+
+def _samples(plan):
+    """One sample in a double support and one in a single support."""
+    return (
+        int(np.flatnonzero(plan.double_support)[5]),
+        int(np.flatnonzero(~plan.double_support)[300]),
+    )
+
+
+def _spin(rate, frame):
+    """ω (..., 3) from Ṙ and R (..., 3, 3): the axial vector of Ṙ Rᵀ."""
+    w = rate @ np.swapaxes(frame, -1, -2)
+    return np.stack([w[..., 2, 1], w[..., 0, 2], w[..., 1, 0]], axis=-1)
+
+
 def _moved(plan, chain, k, x, *, soles=False):
     """The links' CoMs [m] (9, 3) and frames (9, 3, 3) in S at sample k moved by x (z, roll,
     pitch as a rotation vector about the stance sole point, the 8 joints' angles), from the
@@ -94,36 +117,22 @@ def _potential(plan, chain, felt, k, x):
 
 
 @pytest.mark.parametrize("compiled", [False, True])
-def test_its_stiffness_is_the_potentials_hessian(spec, compiled):
+def test_its_stiffness_is_the_potentials_hessian(short_walk, compiled):
     """The base turn's stiffness, its coupling to the joints and the joints' Hessian, against
     central differences of V = −Σ m g'·c through the forward kinematics, with a g' of its
     own for each link (gravity plus a d'Alembert pull), in double and in single support."""
-    from slopewalk.planner.kernel import whole_body as kernel
-    from slopewalk.planner.kinematics import Chain
-
-    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
-    chain = Chain.from_spec(spec)
+    plan, chain = short_walk
     R, o = chain.poses(plan.q, plan.stance_sole, plan.stance)
     com, inertia = wb._links(plan, chain, R, o)
     axes, origins = wb._joints(chain, R, o)
     pull = np.random.default_rng(0).normal(0.0, 5.0, (9, 3)) + [0.0, 0.0, -9.81]
     felt = np.repeat(pull[..., None], plan.t.size, axis=2)
     if compiled:
-        _, stiffness = kernel.mass_and_stiffness(
-            np.ascontiguousarray(chain.mass, dtype=float),
-            wb._rows(com),
-            wb._rows(R[:9]),
-            np.ascontiguousarray(chain.inertia, dtype=float),
-            np.asarray(plan.stance).astype(np.int64),
-            *(wb._rows(a) for a in (axes, origins, plan.stance_sole.T, felt)),
-        )
+        _, stiffness = wb._mass_and_stiffness_compiled(plan, chain, R, com, axes, origins, felt)
     else:
         stiffness = wb._mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt)[1]
     h, step = 1e-4, np.eye(wb.DOF) * 1e-4
-    for k in (
-        int(np.flatnonzero(plan.double_support)[5]),
-        int(np.flatnonzero(~plan.double_support)[300]),
-    ):
+    for k in _samples(plan):
         hessian = np.array(
             [
                 [
@@ -142,21 +151,15 @@ def test_its_stiffness_is_the_potentials_hessian(spec, compiled):
         np.testing.assert_allclose(stiffness[k], hessian, rtol=0, atol=1e-6 * scale)
 
 
-def test_its_mass_matrix_is_the_kinetic_energys(spec):
+def test_its_mass_matrix_is_the_kinetic_energys(short_walk):
     """M = Σ m Jvᵀ Jv + Jωᵀ I Jω with each link's Jacobians taken by central differences of
     its CoM and frame through the forward kinematics (ω from Ṙ Rᵀ, I = R I_link Rᵀ), every
     row (the base's turn and its coupling to the joints included), in double and single
     support."""
-    from slopewalk.planner.kinematics import Chain
-
-    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
-    chain = Chain.from_spec(spec)
+    plan, chain = short_walk
     mass = wb.model_of(plan).mass
     h = 1e-6
-    for k in (
-        int(np.flatnonzero(plan.double_support)[5]),
-        int(np.flatnonzero(~plan.double_support)[300]),
-    ):
+    for k in _samples(plan):
         c, frame = _moved(plan, chain, k, np.zeros(wb.DOF))
         jv, jw = np.zeros((9, 3, wb.DOF)), np.zeros((9, 3, wb.DOF))
         for i in range(wb.DOF):
@@ -165,28 +168,21 @@ def test_its_mass_matrix_is_the_kinetic_energys(spec):
                 _moved(plan, chain, k, s) for s in (step, -step)
             )
             jv[:, :, i] = (up - down) / (2 * h)
-            spin = (turned_up - turned_down) / (2 * h) @ frame.transpose(0, 2, 1)  # [ω]×
-            jw[:, :, i] = np.stack([spin[:, 2, 1], spin[:, 0, 2], spin[:, 1, 0]], axis=1)
+            jw[:, :, i] = _spin((turned_up - turned_down) / (2 * h), frame)
         inertia = frame @ chain.inertia[int(plan.stance[k])] @ frame.transpose(0, 2, 1)
         want = np.einsum("k,kai,kaj->ij", chain.mass, jv, jv)
         want += np.einsum("kai,kab,kbj->ij", jw, inertia, jw)
         np.testing.assert_allclose(mass[k], want, rtol=0, atol=1e-6 * np.abs(want).max())
 
 
-def test_its_sole_jacobians_are_the_forward_kinematics(spec):
+def test_its_sole_jacobians_are_the_forward_kinematics(short_walk):
     """The corners' ∂z/∂x, the second sole point's ∂p/∂x and the second sole's ∂θ/∂x (θ from
     Ṙ Rᵀ), against central differences through the forward kinematics, in double and single
     support; and the corners' planned heights (the swing sole's off the plane)."""
-    from slopewalk.planner.kinematics import Chain
-
-    plan = plan_walk(spec, GaitParams.nominal(spec, 1.0, slope=np.deg2rad(10.0), steps=2))
-    chain = Chain.from_spec(spec)
+    plan, chain = short_walk
     model = wb.model_of(plan)
     h = 1e-6
-    for k in (
-        int(np.flatnonzero(plan.double_support)[5]),
-        int(np.flatnonzero(~plan.double_support)[300]),
-    ):
+    for k in _samples(plan):
         corners, _, frame = _moved(plan, chain, k, np.zeros(wb.DOF), soles=True)
         height = np.where(plan.double_support[k], 0.0, np.maximum(corners[4:, 2], 0.0))
         np.testing.assert_allclose(model.height[4:, k], height, rtol=0, atol=1e-12)
@@ -196,8 +192,7 @@ def test_its_sole_jacobians_are_the_forward_kinematics(spec):
             up, down = (_moved(plan, chain, k, s, soles=True) for s in (step, -step))
             jz[:, i] = (up[0][:, 2] - down[0][:, 2]) / (2 * h)
             jp[:, i] = (up[1] - down[1]) / (2 * h)
-            spin = (up[2] - down[2]) / (2 * h) @ frame.T  # [ω]×
-            jt[:, i] = spin[2, 1], spin[0, 2], spin[1, 0]
+            jt[:, i] = _spin((up[2] - down[2]) / (2 * h), frame)
         for mine, want in ((model.corner, jz), (model.second_point, jp), (model.second_turn, jt)):
             np.testing.assert_allclose(mine[..., k], want, rtol=0, atol=1e-6)
 
