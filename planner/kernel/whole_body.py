@@ -1,9 +1,12 @@
 """The whole-body walk's model and time loop, compiled.
 
-``mass_and_stiffness`` is ``whole_body._mass_and_stiffness`` per sample (the links'
-Jacobians, M = Σ m Jvᵀ Jv + Jωᵀ I Jω, the base's turning stiffness, its coupling to the
-joints and the joints' Hessian; numpy's batched products over the samples move ~10 MB
-temporaries and took ~50 ms of a 4.4 s walk's ~80 ms).
+``mass_and_stiffness`` is ``whole_body._mass_and_stiffness`` per sample (M = Σ m Jvᵀ Jv +
+Jωᵀ I Jω, the base's turning stiffness, its coupling to the joints and the joints'
+Hessian; numpy's batched products over the samples move ~10 MB temporaries and took ~50 ms
+of a 4.4 s walk's ~80 ms). Where the twin sums each link's Jacobians, this sums the links
+past each joint once (mass, first and second moments, inertia; the pull of gravity and
+the d'Alembert forces) and reads every entry from those sums: 12.1 -> 8.3 ms for the 4.4 s
+walk, ~4 ms of it allocating and writing the two 4.3 MB results.
 ``integrate`` is ``whole_body._integrate`` (its readable numpy twin, held equal by
 tests/planner/test_whole_body.py): backward Euler on the plan's time base of the linear
 system x = (z, roll, pitch of the stance sole; the 8 joints' q_ref − q), the servo's
@@ -200,38 +203,125 @@ def integrate(
 
 
 @njit(**_KW)
-def _cross_into(a, b0, b1, b2, out, col):
-    """out[:, col] = a × (b0, b1, b2), written out (no array made: numba allocates each)."""
-    out[0, col] = a[1] * b2 - a[2] * b1
-    out[1, col] = a[2] * b0 - a[0] * b2
-    out[2, col] = a[0] * b1 - a[1] * b0
+def _pull_sums(m, com, felt, out):
+    """Sums over the links from each one to the last of what gravity and the d'Alembert
+    forces pull with (g, each link's ``felt``): ``out[L]`` = Σ_{L' ≥ L} of m c gᵀ (9, row
+    major), m g (3) and m g·c (1); ``out[links]`` zero. The stiffness reads them."""
+    links = com.shape[0]
+    out[links, :] = 0.0
+    for link in range(links - 1, -1, -1):
+        c, g, w = com[link], felt[link], m[link]
+        for a in range(3):
+            for b in range(3):
+                out[link, 3 * a + b] = out[link + 1, 3 * a + b] + w * c[a] * g[b]
+            out[link, 9 + a] = out[link + 1, 9 + a] + w * g[a]
+        out[link, 12] = out[link + 1, 12] + w * (c[0] * g[0] + c[1] * g[1] + c[2] * g[2])
 
 
 @njit(**_KW)
-def _jacobians(c, pivot, axes, origins, link, jv, jw):
-    """Link ``link``'s CoM ``c`` [m]: its linear and angular Jacobians into ``jv``, ``jw``
-    (3, DOF), their first BASE + link columns (the rest stay zero); returns r = c − pivot."""
-    used = BASE + link
-    r0, r1, r2 = c[0] - pivot[0], c[1] - pivot[1], c[2] - pivot[2]
-    jv[:, :used] = 0.0
-    jw[:, :used] = 0.0
-    jv[2, 0] = 1.0
-    jv[1, 1], jv[2, 1] = -r2, r1  # e_x × r
-    jv[0, 2], jv[2, 2] = r2, -r0  # e_y × r
-    jw[0, 1] = jw[1, 2] = 1.0
-    for i in range(link):
-        o = origins[i]
-        _cross_into(axes[i], c[0] - o[0], c[1] - o[1], c[2] - o[2], jv, BASE + i)
-        jw[0, BASE + i] = axes[i, 0]
-        jw[1, BASE + i] = axes[i, 1]
-        jw[2, BASE + i] = axes[i, 2]
-    return r0, r1, r2
+def _body_sums(m, com, rotation, local_inertia, pivot, half, out):
+    """Sums over the links from each one to the last of what moves with a turn: ``out[L]``
+    = Σ_{L' ≥ L} of m (1), m r (3), m r rᵀ (9, row major) and R I Rᵀ (9), r = c − pivot,
+    I a link's inertia about its CoM in its frame, R its frame; ``out[links]`` zero.
+    ``half``: (3, 3) scratch, R I."""
+    links = com.shape[0]
+    out[links, :] = 0.0
+    for link in range(links - 1, -1, -1):
+        w, rot, own = m[link], rotation[link], local_inertia[link]
+        r0, r1, r2 = com[link, 0] - pivot[0], com[link, 1] - pivot[1], com[link, 2] - pivot[2]
+        out[link, 0] = out[link + 1, 0] + w
+        out[link, 1] = out[link + 1, 1] + w * r0
+        out[link, 2] = out[link + 1, 2] + w * r1
+        out[link, 3] = out[link + 1, 3] + w * r2
+        for a in range(3):
+            ra = r0 if a == 0 else (r1 if a == 1 else r2)
+            out[link, 4 + 3 * a] = out[link + 1, 4 + 3 * a] + w * ra * r0
+            out[link, 5 + 3 * a] = out[link + 1, 5 + 3 * a] + w * ra * r1
+            out[link, 6 + 3 * a] = out[link + 1, 6 + 3 * a] + w * ra * r2
+        for a in range(3):  # R I, then its product with Rᵀ: R I Rᵀ
+            for d in range(3):
+                half[a, d] = rot[a, 0] * own[0, d] + rot[a, 1] * own[1, d] + rot[a, 2] * own[2, d]
+        for a in range(3):
+            for b in range(3):
+                turned = half[a, 0] * rot[b, 0] + half[a, 1] * rot[b, 1] + half[a, 2] * rot[b, 2]
+                out[link, 13 + 3 * a + b] = out[link + 1, 13 + 3 * a + b] + turned
+
+
+@njit(**_KW)
+def _mass(body, turn, shift, start, out):
+    """M (DOF, DOF) at one sample from the links' sums (``_body_sums``).
+
+    Column k of the Jacobians moves the links from ``start[k]`` on, each as a twist:
+    angular velocity ``turn[k]`` and, at a point r from the pivot, linear velocity
+    turn[k] × r + shift[k] (the base's z: 0 and e_z; its roll and pitch: e_x, e_y and 0;
+    joint i: a_i and −a_i × (o_i − pivot)). So, summed over the links both columns move
+    (from start[l] on, k ≤ l), M_kl = Σ m (w_k × r + b_k)·(w_l × r + b_l) + w_kᵀ I w_l
+    = w_k·(J w_l + h × b_l) + b_k·(w_l × h + m b_l), with m, h = Σ m r, J = tr(S) 1 − S +
+    Σ R I Rᵀ and S = Σ m r rᵀ over those links: six products a pair, where the links'
+    Jacobians (the numpy twin's form) cost a sum over the links for each."""
+    dof = turn.shape[0]
+    for col in range(dof):
+        sums = body[start[col]]
+        mass, h0, h1, h2 = sums[0], sums[1], sums[2], sums[3]
+        trace = sums[4] + sums[8] + sums[12]
+        w, b = turn[col], shift[col]
+        # u = J w + h × b, v = w × h + m b
+        u0 = (trace - sums[4] + sums[13]) * w[0] + (sums[14] - sums[5]) * w[1]
+        u0 += (sums[15] - sums[6]) * w[2] + h1 * b[2] - h2 * b[1]
+        u1 = (sums[16] - sums[7]) * w[0] + (trace - sums[8] + sums[17]) * w[1]
+        u1 += (sums[18] - sums[9]) * w[2] + h2 * b[0] - h0 * b[2]
+        u2 = (sums[19] - sums[10]) * w[0] + (sums[20] - sums[11]) * w[1]
+        u2 += (trace - sums[12] + sums[21]) * w[2] + h0 * b[1] - h1 * b[0]
+        v0 = w[1] * h2 - w[2] * h1 + mass * b[0]
+        v1 = w[2] * h0 - w[0] * h2 + mass * b[1]
+        v2 = w[0] * h1 - w[1] * h0 + mass * b[2]
+        for k in range(col + 1):
+            wk, bk = turn[k], shift[k]
+            value = wk[0] * u0 + wk[1] * u1 + wk[2] * u2 + bk[0] * v0 + bk[1] * v1 + bk[2] * v2
+            out[k, col] = out[col, k] = value
+
+
+@njit(**_KW)
+def _stiffness(pull, axes, origins, pivot, out):
+    """The stiffness (DOF, DOF) at one sample from the links' pulls (``_pull_sums``): the
+    base's turn, Σ m ((g·r) 1 − sym(g rᵀ)) over its roll and pitch, r = c − pivot; its
+    coupling to joint j, −Σ_{L>j} m (∂c/∂q_j × g) = −(P_j − a_j Q_j); and the potential's
+    Hessian over the joints, H_ij = −Σ_{L>j} m g·(a_i × (a_j × (c − o_j))) = −(a_i·P_j −
+    (a_i·a_j) Q_j) for i ≤ j (link L moves with the joints before it), both by
+    (a × r) × g = r (a·g) − a (r·g), with P_j = Σ m (g·a_j)(c − o_j) and Q_j = Σ m g·(c − o_j)
+    over the links past joint j: O(joints · links) a sample, not the O(joints² · links) of
+    each pair's crosses (the numpy twin's form)."""
+    joints = axes.shape[0]
+    top = pull[0]
+    along = top[12] - (pivot[0] * top[9] + pivot[1] * top[10] + pivot[2] * top[11])  # Σ m g·r
+    xx = top[0] - pivot[0] * top[9]  # Σ m r_x g_x
+    yy = top[4] - pivot[1] * top[10]  # Σ m r_y g_y
+    xy = top[1] - pivot[0] * top[10]  # Σ m r_x g_y
+    yx = top[3] - pivot[1] * top[9]  # Σ m r_y g_x
+    out[1, 1] = along - xx
+    out[2, 2] = along - yy
+    out[1, 2] = out[2, 1] = -0.5 * (xy + yx)
+    for j in range(joints):
+        rows, aj, oj = pull[j + 1], axes[j], origins[j]  # the links past joint j
+        weight = rows[9] * aj[0] + rows[10] * aj[1] + rows[11] * aj[2]  # Σ m g·a_j
+        p0 = rows[0] * aj[0] + rows[1] * aj[1] + rows[2] * aj[2] - oj[0] * weight
+        p1 = rows[3] * aj[0] + rows[4] * aj[1] + rows[5] * aj[2] - oj[1] * weight
+        p2 = rows[6] * aj[0] + rows[7] * aj[1] + rows[8] * aj[2] - oj[2] * weight
+        q = rows[12] - (oj[0] * rows[9] + oj[1] * rows[10] + oj[2] * rows[11])
+        out[1, BASE + j] = out[BASE + j, 1] = -(p0 - aj[0] * q)
+        out[2, BASE + j] = out[BASE + j, 2] = -(p1 - aj[1] * q)
+        for i in range(j + 1):
+            ai = axes[i]
+            cosine = ai[0] * aj[0] + ai[1] * aj[1] + ai[2] * aj[2]
+            value = cosine * q - (ai[0] * p0 + ai[1] * p1 + ai[2] * p2)
+            out[BASE + i, BASE + j] = out[BASE + j, BASE + i] = value
 
 
 @njit(**_KW)
 def mass_and_stiffness(m, com, rotation, local_inertia, side, axes, origins, pivot, felt):
     """``whole_body._mass_and_stiffness`` (its numpy twin) per sample: M and the base-turn
-    and joint-Hessian stiffness, (n, DOF, DOF) each.
+    and joint-Hessian stiffness, (n, DOF, DOF) each, from sums over the links past each
+    joint (``_mass``, ``_stiffness``), not the links' Jacobians one by one.
 
     m: the links' masses [kg] (9,); per sample s: com, each link's CoM [m] (n, 9, 3);
     rotation, its frame's axes in the plane's frame (n, 9, 3, 3); local_inertia, each
@@ -240,64 +330,33 @@ def mass_and_stiffness(m, com, rotation, local_inertia, side, axes, origins, piv
     ``whole_body._links``); axes, origins: joint i's
     axis and a point on it (n, 8, 3); pivot, the stance sole point [m] (n, 3); felt, the
     acceleration each link feels, g − a [m/s²] (n, 9, 3). Link L moves with the base and
-    the joints before it: its Jacobians' columns past BASE + L are zero, and skipped.
+    the joints before it.
     """
     n, links, joints = com.shape[0], com.shape[1], axes.shape[1]
     dof = BASE + joints
     mass = np.zeros((n, dof, dof))
     stiffness = np.zeros((n, dof, dof))
-    jv = np.zeros((3, dof))
-    jw = np.zeros((3, dof))
-    spun = np.zeros((3, dof))
-    turned = np.zeros((3, 3))  # the link's inertia in the plane's frame
-    inner = np.zeros((3, 1))
-    outer = np.zeros((3, 1))
+    body = np.zeros((links + 1, 22))
+    pull = np.zeros((links + 1, 13))
+    turn = np.zeros((dof, 3))  # each column's twist: its turn and its shift at the pivot
+    shift = np.zeros((dof, 3))
+    start = np.zeros(dof, dtype=np.int64)  # the first link it moves
+    half = np.zeros((3, 3))
+    shift[0, 2] = 1.0  # z
+    turn[1, 0] = turn[2, 1] = 1.0  # roll, pitch about the pivot
+    for i in range(joints):
+        start[BASE + i] = i + 1
     for s in range(n):
-        for link in range(links):
-            used = BASE + link  # the columns that move it
-            r0, r1, r2 = _jacobians(com[s, link], pivot[s], axes[s], origins[s], link, jv, jw)
-            rot, own = rotation[s, link], local_inertia[side[s], link]
-            for a in range(3):  # R I Rᵀ
-                for b in range(3):
-                    total = 0.0
-                    for c_ in range(3):
-                        for d in range(3):
-                            total += rot[a, c_] * own[c_, d] * rot[b, d]
-                    turned[a, b] = total
-            for a in range(3):
-                for b in range(used):
-                    spun[a, b] = (
-                        turned[a, 0] * jw[0, b] + turned[a, 1] * jw[1, b] + turned[a, 2] * jw[2, b]
-                    )
-            for a in range(used):
-                for b in range(a, used):
-                    lin = jv[0, a] * jv[0, b] + jv[1, a] * jv[1, b] + jv[2, a] * jv[2, b]
-                    ang = jw[0, a] * spun[0, b] + jw[1, a] * spun[1, b] + jw[2, a] * spun[2, b]
-                    mass[s, a, b] += m[link] * lin + ang
-            g = felt[s, link]
-            along = g[0] * r0 + g[1] * r1 + g[2] * r2
-            # the base's turn: Σ m ((g'·r) I − sym(g' rᵀ)), its roll and pitch rows
-            stiffness[s, 1, 1] += m[link] * (along - g[0] * r0)
-            stiffness[s, 2, 2] += m[link] * (along - g[1] * r1)
-            stiffness[s, 1, 2] -= m[link] * 0.5 * (g[0] * r1 + r0 * g[1])
-            for j in range(link):  # its coupling to the joints: −Σ m (∂c/∂q_j × g'), x and y
-                col = BASE + j
-                stiffness[s, 1, col] -= m[link] * (jv[1, col] * g[2] - jv[2, col] * g[1])
-                stiffness[s, 2, col] -= m[link] * (jv[2, col] * g[0] - jv[0, col] * g[2])
-        for i in range(joints):  # the potential's Hessian
-            for j in range(i, joints):
-                twice = 0.0
-                for link in range(j + 1, links):
-                    c, o = com[s, link], origins[s, j]
-                    _cross_into(axes[s, j], c[0] - o[0], c[1] - o[1], c[2] - o[2], inner, 0)
-                    _cross_into(axes[s, i], inner[0, 0], inner[1, 0], inner[2, 0], outer, 0)
-                    g = felt[s, link]
-                    twice += m[link] * (
-                        g[0] * outer[0, 0] + g[1] * outer[1, 0] + g[2] * outer[2, 0]
-                    )
-                stiffness[s, BASE + i, BASE + j] = -twice
-        for a in range(dof):  # both triangles
-            for b in range(a + 1, dof):
-                mass[s, b, a] = mass[s, a, b]
-                stiffness[s, b, a] = stiffness[s, a, b]
+        p = pivot[s]
+        for i in range(joints):
+            a, o = axes[s, i], origins[s, i]
+            turn[BASE + i] = a
+            d0, d1, d2 = o[0] - p[0], o[1] - p[1], o[2] - p[2]  # −a × (o − pivot)
+            shift[BASE + i, 0] = -(a[1] * d2 - a[2] * d1)
+            shift[BASE + i, 1] = -(a[2] * d0 - a[0] * d2)
+            shift[BASE + i, 2] = -(a[0] * d1 - a[1] * d0)
+        _body_sums(m, com[s], rotation[s], local_inertia[side[s]], p, half, body)
+        _mass(body, turn, shift, start, mass[s])
+        _pull_sums(m, com[s], felt[s], pull)
+        _stiffness(pull, axes[s], origins[s], p, stiffness[s])
     return mass, stiffness
