@@ -129,12 +129,8 @@ def rotation_stiffness(mass: np.ndarray, arm: np.ndarray, gravity: np.ndarray) -
 def _com(plan: Plan, chain: Chain, R: np.ndarray, o: np.ndarray) -> np.ndarray:
     """Each link's CoM [m] (9, 3, n) (the chain's side by the stance at each sample)."""
     right = np.asarray(plan.stance).astype(bool)
-    com = np.empty((9, 3, plan.t.size))
-    for side, where in ((0, ~right), (1, right)):
-        com[..., where] = o[:9][..., where] + np.einsum(
-            "kijn,kj->kin", R[:9][..., where], chain.com[side]
-        )
-    return com
+    arm = np.where(right, chain.com[1][..., None], chain.com[0][..., None])  # (9, 3, n)
+    return o[:9] + (R[:9] * arm[:, None]).sum(axis=2)
 
 
 def _links(plan: Plan, chain: Chain, R: np.ndarray, o: np.ndarray):
@@ -192,8 +188,8 @@ def _heights_jacobian(points: np.ndarray, pivot: np.ndarray, axes, origins) -> n
     jac = np.zeros((8, DOF, points.shape[-1]))
     jac[:, 0] = 1.0
     jac[:, 1], jac[:, 2] = r[:, 1], -r[:, 0]  # (e_x × r)_z, (e_y × r)_z
-    arm = points[4:, None] - origins[None]  # (4, 8, 3, n)
-    jac[4:, BASE:] = axes[None, :, 0] * arm[:, :, 1] - axes[None, :, 1] * arm[:, :, 0]
+    x, y = points[4:, 0, None], points[4:, 1, None]  # (4, 1, n)
+    jac[4:, BASE:] = axes[:, 0] * (y - origins[:, 1]) - axes[:, 1] * (x - origins[:, 0])
     return jac
 
 
