@@ -124,14 +124,15 @@ class Entry:
 
 
 # cold compile CPU s on the 2-core machine (docs/benchmark.md, compile_*_cpu_s): a plan
-# 18.7 s, a trial 38 s (load ~3.6), the GA's scores 36 s (load ~3.6, 30-34 s at ~3); side by
-# side (``prepare``) the plan's process 16.0 s and the predictors' 16.5 s (load ~3)
+# 18.7 s, a trial 38 s (load ~3.6), the GA's scores 36 s (load ~3.6, 30-34 s at ~3)
 ENTRIES = {
     "plan": Entry("plan", ("run",), 18.0),  # a plan's series (run.series)
     "scores": Entry("scores", ("run",), 30.0),  # a GA population's scores (run.scores)
-    # a trial's servo loop, support rocking and whole-body walk (the last: 4.9 of the entry's
-    # 29.3 s of CPU measured by tools/compile_profile.py on a loaded machine, so 19 s -> 23 s)
-    "predictors": Entry("predictors", ("dynamics", "servo", "rocking", "whole_body"), 23.0),
+    # a trial's dynamics, servo loop, support rocking and whole-body walk: the longest
+    # process of ``prepare`` (stop 51, fresh caches): beside the plan's 36.3 s of wall time
+    # at pace 0.85 (43 s at the reference pace), beside the plan's and the scores' 36.2 s at
+    # pace 0.99 (37 s); alone 39 s of CPU (tools/compile_profile.py)
+    "predictors": Entry("predictors", ("dynamics", "servo", "rocking", "whole_body"), 40.0),
 }
 _WARM: set[str] = set()  # entries asked about in this process
 _DONE: set[str] = set()  # entries marked in this process
@@ -140,16 +141,20 @@ NOTICE_S = 600.0  # [s] another process's notice this recent covers this one's
 
 
 def cold_seconds(*names: str, slots: int = 1, slowdown: float | None = None) -> float:
-    """The compile time [s] of the entries of ``names`` whose code is not cached: their sum,
-    over ``slots`` processes compiling them side by side (``prepare``: the entries share
-    ``sample``'s stages, which one process compiles for both, so each of two processes
-    takes about half the sum), times ``slowdown`` (this machine's pace against the one the
-    entries' seconds were measured on; None: ``pace.slowdown()``, measured)."""
+    """The compile time [s] of the entries of ``names`` whose code is not cached, on
+    ``slots`` processes side by side (``prepare``), times ``slowdown`` (this machine's pace
+    against the one the entries' seconds were measured on; None: ``pace.slowdown()``,
+    measured): their sum spread over the processes, but never less than the longest
+    entry's own process. The entries share ``sample``'s stages, which the first process
+    to reach them compiles for all, so the spread sum is about right for the short ones;
+    the predictors' process compiles its own ~30 s of CPU however many there are beside
+    it, and bounds the wall time (stop 51: half the sum said 17 s for a sweep's compile
+    that took 36 s). One slot: the sum."""
     cold = [ENTRIES[n].seconds for n in dict.fromkeys(names) if not ENTRIES[n].mark().exists()]
     if not cold:
         return 0.0
     slowdown = pace.slowdown() if slowdown is None else slowdown
-    return sum(cold) / max(1, min(slots, len(cold))) * slowdown
+    return max(max(cold), sum(cold) / max(1, min(slots, len(cold)))) * slowdown
 
 
 def expect(*names: str) -> None:

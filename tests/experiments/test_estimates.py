@@ -81,7 +81,7 @@ def test_every_term_of_both_estimates_follows_the_measured_pace(tmp_path, monkey
     envelope_reference = envelope.first_estimate_s(192, 2, slowdown=1.0)
     assert envelope.first_estimate_s(192, 2) == pytest.approx(factor * envelope_reference)
     assert cache.cold_seconds("plan", "predictors", slots=2) == pytest.approx(
-        factor * (cache.ENTRIES["plan"].seconds + cache.ENTRIES["predictors"].seconds) / 2
+        factor * cache.cold_seconds("plan", "predictors", slots=2, slowdown=1.0)
     )
 
 
