@@ -34,6 +34,22 @@ def test_a_cold_kernel_adds_its_compile_time_to_both_estimates():
     )
 
 
+def test_a_cold_envelope_counts_its_entries_compiled_side_by_side(tmp_path, monkeypatch):
+    """An envelope's three cold entries compile one process per worker and core
+    (``batch.run``'s ``prepare``): on 2 cores its estimate says their side-by-side time, not
+    their sum one after the other (measured: 36.2 s side by side, where the sum of the
+    entries' own times said 88 s at that pace)."""
+    monkeypatch.setattr(cache, "_root", lambda: str(tmp_path))  # an empty cache: all cold
+    monkeypatch.setattr(envelope.os, "cpu_count", lambda: 2)
+    names = ("scores", "plan", "predictors")
+    start = envelope.WORKER_START_S
+    two = envelope.first_estimate_s(0, 2, slowdown=1.0) - start
+    one = envelope.first_estimate_s(0, 1, slowdown=1.0) - start
+    assert two == pytest.approx(cache.cold_seconds(*names, slots=2, slowdown=1.0))
+    assert one == pytest.approx(sum(cache.ENTRIES[n].seconds for n in names))
+    assert two < one
+
+
 def test_a_report_after_the_trials_adds_its_time_per_robot():
     """The default main job writes the claims and figures after its trials (~10 s at pace
     2, which made the whole command take 2.05 times its first line's estimate)."""

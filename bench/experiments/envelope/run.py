@@ -193,12 +193,15 @@ def first_estimate_s(
     ``slowdown`` (this machine's pace against the reference machine's; None:
     ``pace.slowdown()``, measured), and, where the kernel's code is not cached, its
     compiling (``compile_s``; None: as ``planner/kernel/cache.py`` says for the GA's and a
-    trial's entries, at the same pace)."""
+    trial's entries side by side, one process per worker and core, at the same pace)."""
     slowdown = pace.slowdown() if slowdown is None else slowdown
     if compile_s is None:
         from slopewalk.planner.kernel import cache
 
-        compile_s = cache.cold_seconds("scores", "plan", "predictors", slowdown=slowdown)
+        slots = min(workers, os.cpu_count() or 1)  # ``prepare``'s processes (batch.run)
+        compile_s = cache.cold_seconds(
+            "scores", "plan", "predictors", slots=slots, slowdown=slowdown
+        )
     return (cells * cell_s / max(workers, 1) + WORKER_START_S) * slowdown + compile_s
 
 
