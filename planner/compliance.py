@@ -61,6 +61,10 @@ class CompliantWalk:
             pushes it; None for the static fixed point.
         open_deflection: q_ref − q [rad], (n, 8), of the same loop with the second sole
             never held (``servo_loop.servo_walk``'s ``open_chain_too``); None if not asked.
+        friction_checks: Where the loop through time decided whether the plane still
+            holds a lifting sole, the plane's normal force and |force along it| [N] then,
+            (n, 2), NaN elsewhere (``servo_loop.friction_decides``); None for the static
+            fixed point.
     """
 
     plan: Plan
@@ -70,6 +74,7 @@ class CompliantWalk:
     loop_torque: np.ndarray
     held: np.ndarray | None = None
     open_deflection: np.ndarray | None = None
+    friction_checks: np.ndarray | None = None
 
 
 def compliant_walk(

@@ -199,7 +199,8 @@ TANGENT = HELD.index(0)  # and the force along the plane (x of S)
 
 def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """One step with the trailing sole kept where it is on the plane after lift-off, and
-    whether the plane still holds it; (v', δ', a, held).
+    whether the plane still holds it; (v', δ', a, held, λ_z, |λ_x|), the last two the
+    plane's forces [N] that decided it (``friction_decides``).
 
     The plan lifts the sole at J q̇_ref; held, the sole stays put: J (q̇_ref + v') = 0.
     Where the plane would have to pull (λ_z ≤ 0) the sole has left it, and where it would
@@ -208,11 +209,11 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """
     matrix, rhs = _system(m, c, kk, force, d, v, h)
     a, wrench = _constrained(matrix, rhs, jac, -jac @ (qd_ref + v) / h, wrench=True)
-    normal = wrench[NORMAL]
-    if not (normal > 0.0 and abs(wrench[TANGENT]) <= friction * normal):
-        return (*_backward_euler(m, c, kk, force, d, v, h, None), False)
+    normal, along = wrench[NORMAL], abs(wrench[TANGENT])
+    if not (normal > 0.0 and along <= friction * normal):
+        return (*_backward_euler(m, c, kk, force, d, v, h, None), False, normal, along)
     v = v + h * a
-    return v, d + h * v, a, True
+    return v, d + h * v, a, True, normal, along
 
 
 def _loop_model(plan: Plan, both: np.ndarray, compiled: bool):
@@ -325,18 +326,39 @@ def servo_walk(
         settle_feedforward,
         None if feedforward is None else force_limit,
     )
-    delta, rate, accel, loop, held, finite = _loop(plan, model, both, gains, settle, compiled)
+    delta, rate, accel, loop, held, checks, finite = _loop(
+        plan, model, both, gains, settle, compiled
+    )
     dyn = _Dynamics(plan)
     walk = dyn.plan_of(plan.q + delta, plan.qd + rate, plan.qdd + accel, compiled=compiled)
     opened = None
     if open_chain_too:
         never = np.zeros_like(both)
         opened = -_loop(plan, model, never, gains, settle, compiled)[0]
-    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held, opened)
+    return CompliantWalk(walk, -delta, plan.q.shape[0], bool(finite), loop, held, opened, checks)
+
+
+def friction_decides(walk: CompliantWalk, friction: float) -> bool:
+    """Whether ``servo_walk`` on a plane of μ = ``friction`` (> 0) would make another walk
+    than ``walk``, made with the same arguments at another μ.
+
+    μ enters the loop only where a lifting sole is held (``_trailing``: held while
+    λ_z > 0 and |λ_x| ≤ μ λ_z). Where each of those checks in ``walk``
+    (``CompliantWalk.friction_checks``) comes out the same at ``friction``, every step
+    is the same arithmetic, so the walk is the same to the bit: False. The open chain
+    (``open_chain_too``) never holds a sole and does not depend on μ.
+    """
+    checks, held = walk.friction_checks, walk.held
+    if checks is None or held is None:
+        raise SlopewalkError("friction_decides: the walk has no friction checks (servo_walk's)")
+    made = ~np.isnan(checks[:, 0])
+    normal, along = checks[made, 0], checks[made, 1]
+    return not np.array_equal((normal > 0.0) & (along <= friction * normal), held[made])
 
 
 def _loop(plan: Plan, model: tuple, both: np.ndarray, gains: tuple, settle: tuple, compiled: bool):
-    """``_integrate``'s δ, δ̇, δ̈, request, held and finite for ``plan`` from where the robot
+    """``_integrate``'s δ, δ̇, δ̈, request, held, friction checks and finite for ``plan`` from
+    where the robot
     settled, the second sole held where ``both``; ``model``: (M, K_g, C, need, τ_ff, the
     held rows of J) along the plan, ``settle``: (the torque at rest, ``settle_feedforward``,
     the limit it is clipped to or None without feed-forward), ``gains`` as ``_integrate``'s."""
@@ -405,7 +427,8 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
 
     Returns:
         δ, δ̇, δ̈, the request (n, 8) each, where the second sole is held on the plane
-        (n,) bool, and False where the loop let go (|δ| ≥ π).
+        (n,) bool, the friction checks of a lifting sole (n, 2): λ_z and |λ_x| [N] where
+        ``_trailing`` decided, NaN elsewhere, and False where the loop let go (|δ| ≥ π).
     """
     stiffness, velocity_gain, damping, armature, force_limit, friction = gains
     n, dof = need.shape
@@ -415,6 +438,7 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
     accel = np.zeros((n, dof))
     loop = np.zeros((n, dof))
     held_sole = np.zeros(n, dtype=bool)
+    checks = np.full((n, 2), np.nan)
     v = np.zeros(dof)
     finite = True
     trailing = False  # the sole lifting off is still on the plane, loaded
@@ -431,7 +455,10 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
         kk = gravity_k[k] + np.where(free, stiffness, 0.0) * eye
         force = held + np.where(free, tau_ff[k] - velocity_gain * qd_ref[k], 0.0) - need[k]
         if trailing and not both[k] and h > 0:
-            v, d, a, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k], friction)
+            v, d, a, trailing, normal, along = _trailing(
+                m, c, kk, force, d, v, h, jac[k], qd_ref[k], friction
+            )
+            checks[k] = normal, along
         else:
             hold = both[k] and h > 0
             v, d, a = _backward_euler(m, c, kk, force, d, v, h, jac[k] if hold else None)
@@ -444,4 +471,4 @@ def _integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bo
             break
         delta[k], rate[k], accel[k] = d, v, a
         loop[k] = raw
-    return delta, rate, accel, loop, held_sole, finite
+    return delta, rate, accel, loop, held_sole, checks, finite

@@ -40,7 +40,7 @@ from slopewalk.planner import whole_body
 from slopewalk.planner.compliance import CompliantWalk, compliant_walk
 from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
-from slopewalk.planner.servo_loop import linearised_at, servo_walk
+from slopewalk.planner.servo_loop import friction_decides, linearised_at, servo_walk
 from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
 from slopewalk.planner.verdict import Prediction, predict
 from slopewalk.planner.whole_body import Walk, tip_time
@@ -93,11 +93,8 @@ def predict_trial(plan: Plan, *, friction: float, actuators: str) -> TrialPredic
 def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPrediction:
     """``predict_trial``'s work."""
     servo = servo_settings(plan.spec, actuators)
-    loop = _loop_of(plan, servo)
     walk = _compliant_of(plan, servo)
-    loop_walk = servo_walk(
-        plan, force_limit=servo.force_limit, friction=friction, open_chain_too=True, **loop
-    )
+    loop_walk = _loop_walk(plan, servo, friction)
     floor_stiffness, contact_time = trial_floor(plan, friction=friction, actuators=actuators)
     body = _body_walk(plan, servo, floor_stiffness, contact_time)
     prediction = predict(
@@ -153,6 +150,35 @@ def _body_walk(plan: Plan, servo: Servo, corner_stiffness: float, contact_time: 
         contact_time=contact_time,
         **_loop_of(plan, servo),
     )
+
+
+def _loop_walk(plan: Plan, servo: Servo, friction: float) -> CompliantWalk:
+    """``servo_walk`` of ``plan`` under ``servo``'s loop on a plane of μ ``friction``, its
+    open chain too. μ decides only whether a lifting sole stays held, so the trials of one
+    plan at several frictions mostly make one walk: the walks made so far for this plan
+    object and servo are kept (``_loop_walks``), and one whose every friction check comes
+    out the same at this μ is that walk to the bit (``servo_loop.friction_decides``) and
+    is returned as it is (~14 ms of a default-sweep trial's prediction, issue 24)."""
+    made = _loop_walks(plan, servo)
+    for walk in list(made):
+        if not friction_decides(walk, friction):
+            return walk
+    walk = servo_walk(
+        plan,
+        force_limit=servo.force_limit,
+        friction=friction,
+        open_chain_too=True,
+        **_loop_of(plan, servo),
+    )
+    made.append(walk)
+    return walk
+
+
+@once_per_plan
+def _loop_walks(plan: Plan, servo: Servo) -> list[CompliantWalk]:
+    """The loop walks of ``plan`` under ``servo`` made so far (``_loop_walk``), once per plan
+    object and servo (``planner/per_plan.py``); appended to, never changed."""
+    return []
 
 
 @once_per_plan

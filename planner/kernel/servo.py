@@ -211,7 +211,8 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     """``servo_loop._trailing``: the step with the lifting sole kept on the plane,
     J (q̇_ref + v') = 0, or the free step where the plane would pull (λ_z ≤ 0) or hold it
     past the friction cone (|λ_x| > μ λ_z); (v', δ', a, whether every system was regular,
-    whether the plane still holds it)."""
+    whether the plane still holds it, and the plane's normal force and |force along it| [N]
+    that decided it: ``servo_loop.friction_decides``'s record)."""
     dof = d.shape[0]
     lifted = np.empty(dof)
     for i in range(dof):
@@ -222,18 +223,18 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
         target[r] = -target[r] / h
     a, wrench, good = _constrained(matrix, rhs, jac, target)
     if not good:
-        return v, d, a, False, False
-    normal = wrench[_NORMAL]
-    held = normal > 0.0 and abs(wrench[_TANGENT]) <= friction * normal
+        return v, d, a, False, False, np.nan, np.nan
+    normal, along = wrench[_NORMAL], abs(wrench[_TANGENT])
+    held = normal > 0.0 and along <= friction * normal
     if not held:
         # held, False here: the bool variable, as at ``integrate``'s call of ``_step``
         vn, dn, a, ok = _step(m, c, kk, force, d, v, h, jac, held)
-        return vn, dn, a, ok, False
+        return vn, dn, a, ok, False, normal, along
     vn, dn = np.empty(dof), np.empty(dof)
     for i in range(dof):
         vn[i] = v[i] + h * a[i]
         dn[i] = d[i] + h * vn[i]
-    return vn, dn, a, True, True
+    return vn, dn, a, True, True, normal, along
 
 
 @njit(**_KW)
@@ -275,7 +276,9 @@ def _let_go(d):
 @njit(**_KW)
 def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, both, jac, gains, d):
     """``servo_loop._integrate``: the servo loop's δ, δ̇, δ̈, request, where the second
-    sole is held on the plane, whether it held,
+    sole is held on the plane, the friction checks of the lifting sole ((n, 2): the
+    plane's normal force and |force along it| [N] where the check was made, NaN
+    elsewhere), whether it held,
     and whether every linear system on the way was regular (False: a step met a
     singular one, where numpy's minimum-norm solution is not LU's; the caller reruns
     the numpy twin).
@@ -286,6 +289,7 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
     delta, rate = np.zeros((n, dof)), np.zeros((n, dof))
     accel, loop = np.zeros((n, dof)), np.zeros((n, dof))
     held = np.zeros(n, dtype=np.bool_)
+    checks = np.full((n, 2), np.nan)
     m, c, kk = np.empty((dof, dof)), np.empty((dof, dof)), np.empty((dof, dof))
     force, raw = np.empty(dof), np.empty(dof)
     v = np.zeros(dof)
@@ -298,22 +302,25 @@ def integrate(mass, gravity_k, velocity_c, need, qd_ref, tau_ff, dt, stance, bot
             k, mass, gravity_k, velocity_c, need, qd_ref, tau_ff, gains, d, v, m, c, kk, force, raw
         )
         if trailing and not both[k] and h > 0:
-            v, d, a, ok, trailing = _trailing(m, c, kk, force, d, v, h, jac[k], qd_ref[k], gains[5])
+            v, d, a, ok, trailing, normal, along = _trailing(
+                m, c, kk, force, d, v, h, jac[k], qd_ref[k], gains[5]
+            )
+            checks[k, 0], checks[k, 1] = normal, along
         else:
             v, d, a, ok = _step(m, c, kk, force, d, v, h, jac[k], both[k] and h > 0)
             trailing = both[k]
         held[k] = trailing
         if not ok:
-            return delta, rate, accel, loop, held, True, False
+            return delta, rate, accel, loop, held, checks, True, False
         if _let_go(d):
             for r in range(k, n):
                 for i in range(dof):
                     delta[r, i], rate[r, i] = delta[k - 1, i], 0.0
                     accel[r, i], loop[r, i] = 0.0, loop[k - 1, i]
-            return delta, rate, accel, loop, held, False, True
+            return delta, rate, accel, loop, held, checks, False, True
         for i in range(dof):
             delta[k, i], rate[k, i], accel[k, i], loop[k, i] = d[i], v[i], a[i], raw[i]
-    return delta, rate, accel, loop, held, True, True
+    return delta, rate, accel, loop, held, checks, True, True
 
 
 @njit(**_KW)

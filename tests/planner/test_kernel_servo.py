@@ -109,6 +109,8 @@ def test_compiled_servo_walk_is_the_numpy_one(spec, plan, limit, share):
     assert np.isfinite(limit) == (np.abs(want.loop_torque) > limit).any()
     assert got.converged == want.converged
     np.testing.assert_array_equal(got.held, want.held)
+    np.testing.assert_array_equal(np.isnan(got.friction_checks), np.isnan(want.friction_checks))
+    np.testing.assert_allclose(got.friction_checks, want.friction_checks, rtol=1e-6, atol=1e-6)
     if not share:
         assert (want.held & ~plan.double_support).any()  # a lifting sole held: _trailing ran
     np.testing.assert_allclose(got.deflection, want.deflection, rtol=0, atol=1e-8)

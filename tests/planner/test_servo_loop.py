@@ -144,13 +144,48 @@ def test_a_trailing_sole_is_held_along_the_plane_only_inside_the_friction_cone(
     still = np.zeros(dof)
     args = (eye, zero, zero, force, still, still, h, eye, drag, friction)
     if compiled:
-        v, d, a, ok, held = servo._trailing(*args)
+        v, d, a, ok, held, normal, along = servo._trailing(*args)
         assert ok
     else:
-        v, d, a, held = _trailing(*args)
+        v, d, a, held, normal, along = _trailing(*args)
+    assert (normal, along) == pytest.approx((push, 10.0))  # λ_z, |λ_x| [N], as derived
     assert held == (10.0 <= friction * push)
     want = -drag if held else h * force
     np.testing.assert_allclose(v, want, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_walk_is_made_again_only_at_a_friction_that_decides_a_lifting_soles_hold(spec, compiled):
+    """``friction_decides``: two 0.5 s steps up 10° with the AX-12A loop and no
+    feed-forward keep the trailing sole held after lift-off (``_trailing``), each hold as
+    long as |λ_x| ≤ μ λ_z. Just above the largest |λ_x| / λ_z of the holds (made at μ = ∞)
+    every check comes out the same: the walk at that μ is the same to the bit and says so;
+    just below it one hold lets go: another walk, and it says that too."""
+    from slopewalk.planner.servo_loop import friction_decides
+
+    plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
+    kw = dict(
+        stiffness=spec.stiffness,
+        damping=spec.stall_torque / spec.no_load_speed,
+        armature=spec.armature,
+        force_limit=spec.stall_torque,
+        compiled=compiled,
+        open_chain_too=True,
+    )
+    free = servo_walk(plan, friction=np.inf, **kw)
+    checks = free.friction_checks
+    held = ~np.isnan(checks[:, 0]) & free.held
+    assert held.sum() > 2  # holds after lift-off to decide
+    ratio = (checks[held, 1] / checks[held, 0]).max()
+    assert ratio > 0
+    for mu, decides in ((ratio * 1.001, False), (ratio * 0.999, True)):
+        assert friction_decides(free, mu) == decides
+        walk = servo_walk(plan, friction=mu, **kw)
+        same = np.array_equal(walk.held, free.held) and np.array_equal(
+            walk.deflection, free.deflection
+        )
+        assert same != decides
+        np.testing.assert_array_equal(walk.open_deflection, free.open_deflection)
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -170,12 +205,15 @@ def test_a_lifting_sole_stays_on_the_plane_while_the_plane_pushes_it(compiled, p
     lift = np.array([0.0, 0.01, 0.0, 0.0])
     still = np.zeros(dof)
     if compiled:
-        v, d, a, ok, pushed = servo._trailing(
+        v, d, a, ok, pushed, normal, along = servo._trailing(
             eye, zero, zero, force, still, still, h, eye, lift, np.inf
         )
         assert ok
     else:
-        v, d, a, pushed = _trailing(eye, zero, zero, force, still, still, h, eye, lift, np.inf)
+        v, d, a, pushed, normal, along = _trailing(
+            eye, zero, zero, force, still, still, h, eye, lift, np.inf
+        )
+    assert normal == pytest.approx(-0.01 / h + push)
     held = -0.01 / h + push > 0
     assert pushed == held
     want = -lift if held else h * force
