@@ -540,14 +540,50 @@ def predict(
     case, and the reached sole's travel while it holds the robot up (``strike_roll`` > 0)
     decides ``swing_drag`` too (the earlier of the two is the one reported).
     """
+    events, rotation = events_but_slip(
+        plan,
+        walk=walk,
+        stiffness=stiffness,
+        force_limit=force_limit,
+        floor_stiffness=floor_stiffness,
+        contact_time=contact_time,
+        ring_settle=ring_settle,
+        body_tip=body_tip,
+    )
+    slips, slide = slip_events(plan if walk is None else walk.plan, friction)
+    return with_slips(events, rotation, slips, slide)
+
+
+def with_slips(
+    events: list[PredictedEvent], rotation: np.ndarray, slips: list[PredictedEvent], slide
+) -> Prediction:
+    """``predict``'s prediction from ``events_but_slip``'s events and rotation and
+    ``slip_events``' slips and slide: every event by time (then kind) and the verdict."""
+    every = sorted(events + slips, key=lambda e: (e.time, e.kind))
+    return Prediction(verdict(every), every, rotation, slide)
+
+
+def events_but_slip(
+    plan,
+    *,
+    walk=None,
+    stiffness: float | None = None,
+    force_limit: float = np.inf,
+    floor_stiffness: float | None = None,
+    contact_time: float | None = None,
+    ring_settle: np.ndarray | None = None,
+    body_tip: float | None = None,
+) -> tuple[list[PredictedEvent], np.ndarray]:
+    """``predict``'s events but ``slip`` (the only one μ decides), by time, and the
+    support's rotation [rad], (n,); arguments as ``predict``'s. The trials of one walk at
+    several frictions share them (``bench/sim/prediction.py``)."""
     made = plan if walk is None else walk.plan
     events = joint_limit_events(plan) + foot_slide_events(plan, contact_time)
     props = np.zeros(plan.t.size, dtype=bool)
     tips, rotation = tip_events(
         made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness, props=props
     )
-    slips, slide = slip_events(made, friction)
-    events += tips + slips + ring_events(plan, ring_settle)
+    events += tips + ring_events(plan, ring_settle)
     drags = swing_drag_events(plan, props)
     if walk is not None:
         if stiffness is None:
@@ -574,4 +610,4 @@ def predict(
     if body_tip is not None:
         events.append(PredictedEvent(float(body_tip), "tip", BODY_TIP))
     events.sort(key=lambda e: (e.time, e.kind))
-    return Prediction(verdict(events), events, rotation, slide)
+    return events, rotation

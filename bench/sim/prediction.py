@@ -42,7 +42,13 @@ from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import friction_decides, linearised_at, servo_walk
 from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
-from slopewalk.planner.verdict import Prediction, predict
+from slopewalk.planner.verdict import (
+    PredictedEvent,
+    Prediction,
+    events_but_slip,
+    slip_events,
+    with_slips,
+)
 from slopewalk.planner.whole_body import Walk, tip_time
 
 
@@ -94,20 +100,10 @@ def _prediction_of(plan: Plan, friction: float, actuators: str) -> TrialPredicti
     """``predict_trial``'s work."""
     servo = servo_settings(plan.spec, actuators)
     walk = _compliant_of(plan, servo)
-    loop_walk = _loop_walk(plan, servo, friction)
-    floor_stiffness, contact_time = trial_floor(plan, friction=friction, actuators=actuators)
-    body = _body_walk(plan, servo, floor_stiffness, contact_time)
-    prediction = predict(
-        plan,
-        friction=friction,
-        walk=loop_walk,
-        stiffness=servo.kp,
-        force_limit=servo.force_limit,
-        floor_stiffness=floor_stiffness,
-        contact_time=contact_time,
-        ring_settle=_ring_settle(plan, servo),
-        body_tip=tip_time(plan, body),
-    )
+    made, loop_walk = _loop_walk(plan, servo, friction)
+    floor = trial_floor(plan, friction=friction, actuators=actuators)
+    events, rotation = _events_of(plan, servo, made, *floor)
+    prediction = with_slips(events, rotation, *slip_events(loop_walk.plan, friction))
     from slopewalk.planner.kernel import cache
 
     # the entry's last kernel call made (``predict``'s rocking): marked warm only now, so a
@@ -152,17 +148,41 @@ def _body_walk(plan: Plan, servo: Servo, corner_stiffness: float, contact_time: 
     )
 
 
-def _loop_walk(plan: Plan, servo: Servo, friction: float) -> CompliantWalk:
+@once_per_plan
+def _events_of(
+    plan: Plan, servo: Servo, made: int, floor_stiffness: float, contact_time: float
+) -> tuple[list[PredictedEvent], np.ndarray]:
+    """``verdict.events_but_slip`` of ``plan`` judged on its ``made``-th loop walk under
+    ``servo`` (``_loop_walk``) on a floor of that corner stiffness [N/m] and contact time
+    [s]: every predicted event but ``slip``, the one μ decides beside the loop walk, and the
+    support's rotation. Once per plan object, servo, walk and floor: the trials that share
+    a loop walk share these (``verdict.predict`` is ``with_slips`` of the two, the same
+    events in the same order)."""
+    loop_walk = _loop_walks(plan, servo)[made]
+    body = _body_walk(plan, servo, floor_stiffness, contact_time)
+    return events_but_slip(
+        plan,
+        walk=loop_walk,
+        stiffness=servo.kp,
+        force_limit=servo.force_limit,
+        floor_stiffness=floor_stiffness,
+        contact_time=contact_time,
+        ring_settle=_ring_settle(plan, servo),
+        body_tip=tip_time(plan, body),
+    )
+
+
+def _loop_walk(plan: Plan, servo: Servo, friction: float) -> tuple[int, CompliantWalk]:
     """``servo_walk`` of ``plan`` under ``servo``'s loop on a plane of μ ``friction``, its
     open chain too. μ decides only whether a lifting sole stays held, so the trials of one
     plan at several frictions mostly make one walk: the walks made so far for this plan
     object and servo are kept (``_loop_walks``), and one whose every friction check comes
     out the same at this μ is that walk to the bit (``servo_loop.friction_decides``) and
-    is returned as it is (~14 ms of a default-sweep trial's prediction, issue 24)."""
+    is returned as it is, with its index in ``_loop_walks`` (issue 24)."""
     made = _loop_walks(plan, servo)
-    for walk in list(made):
+    for index, walk in enumerate(list(made)):
         if not friction_decides(walk, friction):
-            return walk
+            return index, walk
     walk = servo_walk(
         plan,
         force_limit=servo.force_limit,
@@ -170,8 +190,12 @@ def _loop_walk(plan: Plan, servo: Servo, friction: float) -> CompliantWalk:
         open_chain_too=True,
         **_loop_of(plan, servo),
     )
-    made.append(walk)
-    return walk
+    with _APPENDING:  # a trial's prediction runs on a thread beside its playback
+        made.append(walk)
+        return len(made) - 1, walk
+
+
+_APPENDING = threading.Lock()
 
 
 @once_per_plan
