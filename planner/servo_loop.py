@@ -348,6 +348,8 @@ def friction_decides(walk: CompliantWalk, friction: float) -> bool:
     is the same arithmetic, so the walk is the same to the bit: False. The open chain
     (``open_chain_too``) never holds a sole and does not depend on μ.
     """
+    if not friction > 0:
+        raise SlopewalkError(f"friction {friction!r}: must be > 0 (inf: no bound)")
     checks, held = walk.friction_checks, walk.held
     if checks is None or held is None:
         raise SlopewalkError("friction_decides: the walk has no friction checks (servo_walk's)")

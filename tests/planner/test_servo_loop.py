@@ -178,6 +178,9 @@ def test_a_walk_is_made_again_only_at_a_friction_that_decides_a_lifting_soles_ho
     assert held.sum() > 2  # holds after lift-off to decide
     ratio = (checks[held, 1] / checks[held, 0]).max()
     assert ratio > 0
+    for bad in (0.0, -1.0, np.nan):
+        with pytest.raises(SlopewalkError, match="must be > 0"):
+            friction_decides(free, bad)
     for mu, decides in ((ratio * 1.001, False), (ratio * 0.999, True)):
         assert friction_decides(free, mu) == decides
         walk = servo_walk(plan, friction=mu, **kw)
