@@ -210,10 +210,18 @@ def _trailing(m, c, kk, force, d, v, h, jac, qd_ref, friction):
     matrix, rhs = _system(m, c, kk, force, d, v, h)
     a, wrench = _constrained(matrix, rhs, jac, -jac @ (qd_ref + v) / h, wrench=True)
     normal, along = wrench[NORMAL], abs(wrench[TANGENT])
-    if not (normal > 0.0 and along <= friction * normal):
+    if not _plane_holds(normal, along, friction):
         return (*_backward_euler(m, c, kk, force, d, v, h, None), False, normal, along)
     v = v + h * a
     return v, d + h * v, a, True, normal, along
+
+
+def _plane_holds(normal, along, friction):
+    """Whether the plane holds a lifting sole pressed with λ_z = ``normal`` and pushed along
+    itself with |λ_x| = ``along`` [N] (scalars or arrays): λ_z > 0 and |λ_x| ≤ μ λ_z. One
+    expression for ``_trailing`` and ``friction_decides``, so the two decide alike to the
+    bit (``kernel.servo._trailing`` writes the same)."""
+    return (normal > 0.0) & (along <= friction * normal)
 
 
 def _loop_model(plan: Plan, both: np.ndarray, compiled: bool):
@@ -355,7 +363,7 @@ def friction_decides(walk: CompliantWalk, friction: float) -> bool:
         raise SlopewalkError("friction_decides: the walk has no friction checks (servo_walk's)")
     made = ~np.isnan(checks[:, 0])
     normal, along = checks[made, 0], checks[made, 1]
-    return not np.array_equal((normal > 0.0) & (along <= friction * normal), held[made])
+    return not np.array_equal(_plane_holds(normal, along, friction), held[made])
 
 
 def _loop(plan: Plan, model: tuple, both: np.ndarray, gains: tuple, settle: tuple, compiled: bool):

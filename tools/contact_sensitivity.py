@@ -79,11 +79,11 @@ def main(argv: list[str]) -> None:
         played = pool.map(_play, jobs, chunksize=8)
     walks = {(i, v): verdict == "stable" for i, v, verdict in played}
     moved, kept = Counter(), {"predicted": [0, 0], "paper": [0, 0]}
+    kind = {(1, 1): "both walk", (0, 0): "both fail", (0, 1): "false alarm", (1, 0): "miss"}
     for i, row in rows.items():
         sim = row["simulated_verdict"] == "stable"
         pred = row["predicted_verdict"] == "stable"
         moves = any(walks[(i, v)] != sim for v in range(len(VARIANTS)))
-        kind = {(1, 1): "both walk", (0, 0): "both fail", (0, 1): "false alarm", (1, 0): "miss"}
         moved[(kind[(pred, sim)], moves)] += 1
         if not moves:
             for name, verdict in (
