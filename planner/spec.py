@@ -35,6 +35,9 @@ GEOMETRY_KEYS = (
 )
 # optional [geometry] keys and their defaults (a spec without them is the paper's layout)
 OPTIONAL_GEOMETRY: dict[str, Any] = {"sole_offset": 0.0, "knee_offset": 0.0, "sole_polygon": None}
+# the optional [contact] table: the soles' contact with the floor, MuJoCo's ``solref`` (time
+# constant [s], damping ratio [-]); absent, MuJoCo's defaults, which every scene used before
+CONTACT_DEFAULTS: dict[str, float] = {"timeconst": 0.02, "dampratio": 1.0}
 
 
 @dataclass(frozen=True)
@@ -104,6 +107,11 @@ class RobotSpec:
         velocity_gain: Servo velocity gain kv [N m s/rad] (on the joint speed).
         armature: Reflected rotor inertia per joint [kg m²].
         friction_loss: Dry joint friction per joint [N m].
+        contact_timeconst: Time constant τ of the soles' contact with the floor [s]
+            (MuJoCo's ``solref[0]``: how fast a penetration is pushed back; the floor's
+            give with the foot's mass); 0.02 is MuJoCo's default.
+        contact_dampratio: Damping ratio ζ of that contact [-] (``solref[1]``; below 1 a
+            landing bounces); 1 is MuJoCo's default.
     """
 
     name: str
@@ -125,6 +133,8 @@ class RobotSpec:
     sole_offset: float = 0.0
     knee_offset: float = 0.0
     sole_polygon: tuple[tuple[float, float], ...] | None = None
+    contact_timeconst: float = CONTACT_DEFAULTS["timeconst"]
+    contact_dampratio: float = CONTACT_DEFAULTS["dampratio"]
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -157,6 +167,8 @@ class RobotSpec:
                 )
         for key, allowed in SERVO.items():
             allowed.check(f"servo.{key}", getattr(self, key), SpecError)
+        for key, allowed in CONTACT.items():
+            allowed.check(f"contact.{key}", getattr(self, f"contact_{key}"), SpecError)
 
     @property
     def heel_offset(self) -> float:
@@ -164,12 +176,14 @@ class RobotSpec:
         return self.foot_length - self.ankle_to_toe
 
     def as_dict(self) -> dict[str, Any]:
-        """The spec's fields as plain data; an optional geometry key at its default is left
-        out, so a spec without it is written (and identified) as before the key existed."""
+        """The spec's fields as plain data; an optional geometry or contact key at its default
+        is left out, so a spec without it is written (and identified) as before the key
+        existed."""
         from dataclasses import asdict
 
         d = asdict(self)
-        for key, default in OPTIONAL_GEOMETRY.items():
+        optional = {**OPTIONAL_GEOMETRY, **{f"contact_{k}": v for k, v in CONTACT_DEFAULTS.items()}}
+        for key, default in optional.items():
             if d[key] == default:
                 del d[key]
         return d
@@ -322,7 +336,7 @@ def spec_from_dict(data: dict[str, Any], *, source: str = "<dict>") -> RobotSpec
 
 # "uncertain": the ranges of the estimated values, read and checked apart from the robot's
 # numbers by planner/uncertainty.py (which builds on this module, so not here)
-TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo", "uncertain")
+TOP_KEYS = ("name", "geometry", "links", "joint_limits", "servo", "contact", "uncertain")
 LINK_KEYS = ("mass", "com", "inertia")
 
 
@@ -336,6 +350,10 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     _known(links_table, LINK_NAMES, "links.")
     _known(limits, JOINT_LIMIT_KEYS, "joint_limits.")
     _known(servo, tuple(SERVO), "servo.")
+    contact = data.get("contact", {})
+    if not isinstance(contact, dict):
+        raise SpecError(f"contact = {contact!r}: must be a table [contact]")
+    _known(contact, tuple(CONTACT), "contact.")
     links: dict[str, LinkInertial] = {}
     for name in LINK_NAMES:
         link = _table(links_table, name, prefix="links.")
@@ -354,6 +372,10 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
         links=links,
         joint_limits=joint_limits,
         **{key: _number(servo, key, "servo") for key in SERVO},
+        **{
+            f"contact_{key}": _float(contact.get(key, default))
+            for key, default in CONTACT_DEFAULTS.items()
+        },  # fmt: skip
     )
 
 
@@ -421,5 +443,9 @@ SERVO = {
     "armature": Range(0.0, 1e3, "kg m^2", low_open=False),
     "friction_loss": Range(0.0, 1e4, "N m", low_open=False),
 }
+# [contact]: a time constant from a stiff floor's 1 ms to a mattress's 1 s (MuJoCo keeps it
+# at 2 steps at least: the scene refuses one below that); a damping ratio from a bouncing
+# to a dead landing
+CONTACT = {"timeconst": Range(0.0, 1.0, "s"), "dampratio": Range(0.0, 100.0, "")}
 MASS_SCALE = Range(0.0, 1e3)
 FINITE_INERTIA = Range(-math.inf, math.inf, "kg m^2")

@@ -13,7 +13,9 @@ Keys address one number of the spec, dotted as the TOML tables are:
 * ``links.<link>.mass`` [kg] (the link's inertia scales with it: a heavier part of the
   same shape), ``links.<link>.com.x|y|z`` [m];
 * ``joint_limits.<kind>.lower|upper`` [rad];
-* ``servo.<key>`` (e.g. ``servo.stall_torque``) in its unit.
+* ``servo.<key>`` (e.g. ``servo.stall_torque``) in its unit;
+* ``contact.timeconst`` [s], ``contact.dampratio`` [-]: the soles' contact with the floor
+  (the spec's ``[contact]``, MuJoCo's ``solref``; its defaults where the spec has none).
 
 Each range must hold the spec's own value (``low ≤ value ≤ high``, ``low < high``) and
 each end must make a valid spec; anything else is refused in one line naming the key,
@@ -33,6 +35,7 @@ from slopewalk.planner.config_file import load_toml
 from slopewalk.planner.errors import SpecError
 from slopewalk.planner.ranges import show
 from slopewalk.planner.spec import (
+    CONTACT,
     GEOMETRY_KEYS,
     JOINT_LIMIT_KEYS,
     LINK_NAMES,
@@ -76,6 +79,7 @@ def known_keys(spec: RobotSpec) -> tuple[str, ...]:
         keys += [f"links.{link}.mass", *(f"links.{link}.com.{a}" for a in _AXES)]
     keys += [f"joint_limits.{kind}.{end}" for kind in JOINT_LIMIT_KEYS for end in _ENDS]
     keys += [f"servo.{k}" for k in SERVO]
+    keys += [f"contact.{k}" for k in CONTACT]
     return tuple(keys)
 
 
@@ -91,6 +95,8 @@ def value_of(spec: RobotSpec, key: str) -> tuple[float, str]:
         return link.com[_AXES.index(part[3])], "m"
     if part[0] == "joint_limits":
         return spec.joint_limits[part[1]][_ENDS.index(part[2])], "rad"
+    if part[0] == "contact":
+        return float(getattr(spec, f"contact_{part[1]}")), CONTACT[part[1]].unit
     return float(getattr(spec, part[1])), SERVO[part[1]].unit
 
 
@@ -103,8 +109,9 @@ def spec_at(spec: RobotSpec, key: str, value: float) -> RobotSpec:
     if key not in known_keys(spec):
         raise SpecError(f"{TABLE}.{key}: not a value of the spec")
     part = key.split(".")
-    if part[0] in ("geometry", "servo"):
-        changes: dict[str, Any] = {part[1]: float(value)}
+    if part[0] in ("geometry", "servo", "contact"):
+        field = f"contact_{part[1]}" if part[0] == "contact" else part[1]
+        changes: dict[str, Any] = {field: float(value)}
         return replace(spec, **changes)
     if part[0] == "links":
         link = spec.links[part[1]]
@@ -144,7 +151,7 @@ def uncertain_values(spec: RobotSpec, table: Any) -> tuple[Uncertain, ...]:
             raise SpecError(
                 f"unknown key {name}: not an estimated value of the spec (known: "
                 "geometry.<key>, links.<link>.mass, links.<link>.com.x|y|z, "
-                "joint_limits.<kind>.lower|upper, servo.<key>)"
+                "joint_limits.<kind>.lower|upper, servo.<key>, contact.timeconst|dampratio)"
             )
         nominal, unit = value_of(spec, key)
         if not (

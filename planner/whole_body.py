@@ -17,8 +17,10 @@ turn is that of gravity and the plan's d'Alembert forces on every link,
 coupling to the joints −Σ m (∂c/∂q_j × g'); the joint block is the loop's K_g in single
 support and the potential's Hessian in double support, where the loop's holds the plan's
 split. The ground is the soft floor's 8 sole corners (the simulator's corner
-stiffness k_c, damper 2 τ k_c, τ its contact time): a corner pushes
-f = f_nom + k_c (−z) − 2 τ k_c ż where that is positive, none otherwise, z its height
+stiffness k_c, damper 2 τ ζ² k_c, τ its contact time and ζ its damping ratio: MuJoCo's
+``solref`` gives a contact damping B over stiffness K of 2 d_max τ ζ², so the damper is
+that of MuJoCo's contact to d_max's factor, 0.95; ``floor_spring``): a corner pushes
+f = f_nom + k_c (−z) − 2 τ ζ² k_c ż where that is positive, none otherwise, z its height
 off the plane, f_nom the plan's load on it (each sole's planned normal force spread
 bilinearly over its corners at the planned CoP, clamped to the sole: the ground cannot push
 beyond it, so a planned ZMP outside the sole leaves its moment unbalanced and the base
@@ -348,6 +350,14 @@ class _Loop:
     gains: tuple  # kp, kv, damping, armature, τ_max
 
 
+def floor_spring(
+    corner_stiffness: float, contact_time: float, dampratio: float
+) -> tuple[float, float]:
+    """(k_c [N/m], c [N s/m]): a sole corner's spring and damper on a floor of that corner
+    stiffness, contact time τ [s] and damping ratio ζ [-], c = 2 τ ζ² k_c (module doc)."""
+    return corner_stiffness, 2 * contact_time * dampratio**2 * corner_stiffness
+
+
 def walk(
     plan: Plan,
     *,
@@ -359,10 +369,12 @@ def walk(
     feedforward: np.ndarray | None,
     corner_stiffness: float,
     contact_time: float,
+    contact_dampratio: float = 1.0,
     compiled: bool = True,
 ) -> Walk:
     """The model's walk of ``plan`` played by a servo loop (``servo_loop.servo_walk``'s
-    settings) on a soft floor of corner stiffness [N/m] and contact time [s] (module doc);
+    settings) on a soft floor of corner stiffness [N/m], contact time [s] and damping ratio
+    [-] (module doc);
     ``compiled``: the model's M and stiffness and the time loop on the kernel
     (``kernel.whole_body``), else their numpy twins (``_integrate`` also where the kernel
     meets a singular system)."""
@@ -371,6 +383,7 @@ def walk(
         ("force_limit", force_limit),
         ("corner_stiffness", corner_stiffness),
         ("contact_time", contact_time),
+        ("contact_dampratio", contact_dampratio),
     ):
         if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value > 0):
             raise SlopewalkError(f"whole_body.walk: {name} {value!r}: must be finite and > 0")
@@ -384,7 +397,7 @@ def walk(
     limit = None if feedforward is None else force_limit
     start = np.zeros(DOF)
     start[BASE:] = _settled_offset(torque_at_rest(plan), rest, jac[0], both[0], None, limit)
-    floor = (corner_stiffness, 2 * contact_time * corner_stiffness)
+    floor = floor_spring(corner_stiffness, contact_time, contact_dampratio)
     solved = _integrate_compiled(plan, model, loop, floor, start) if compiled else None
     states, forces = _integrate(plan, model, loop, floor, start) if solved is None else solved
     turn = np.einsum("ijn,nj->ni", model.second_turn, states)

@@ -4,8 +4,9 @@ The model file is compiled as it is (its own bodies, actuators, contacts and opt
 MuJoCo's model-editing API (``mujoco.MjSpec``) only *adds* to it what a trial needs,
 never changes what is there:
 
-* the tilted floor plane (``model._add_world``'s: friction μ, condim 3, priority 1),
-  and a free joint on the base where the model fixes it to the world (a URDF);
+* the tilted floor plane (``model._add_world``'s: friction μ, condim 3, priority 1, and
+  the spec's ``[contact]`` as its ``solref`` where the spec has one that is not MuJoCo's
+  default), and a free joint on the base where the model fixes it to the world (a URDF);
 * the trial's sensors under the twin's names (``contact.add_trial_sensors``), pointing
   at the model's own bodies and joints: each foot's contacts with the floor (all its
   geoms), the mapped joints' angles and the actuator force on them (``JOINTACTFRC``),
@@ -42,7 +43,14 @@ from slopewalk.bench.robot_import.fit import BaseFrame, Fit, fit_model, posed
 from slopewalk.bench.robot_import.mapfile import SIDES, load_map
 from slopewalk.bench.sim.contact import FOOT_GEOMS, JOINT_SIGN, MAX_CONTACTS, NON_FOOT_BODIES
 from slopewalk.bench.sim.floor import SoftFloor
-from slopewalk.bench.sim.model import IMPRATIO, SceneError, mujoco_message, servo_settings
+from slopewalk.bench.sim.model import (
+    IMPRATIO,
+    SceneError,
+    check_contact_step,
+    contact_solref,
+    mujoco_message,
+    servo_settings,
+)
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import MJCF_JOINTS, SIDE_PREFIX
 from slopewalk.planner.kinematics import Chain, rotation_slope_to_world
@@ -115,6 +123,10 @@ class ModelScene:
             quat=_quat(rotation_slope_to_world(plan.params.slope)),
             friction=[friction, 0.005, 0.0001], condim=3, priority=1, contype=1, conaffinity=1,
         )  # fmt: skip
+        check_contact_step(self.spec, timestep)
+        solref = contact_solref(self.spec)
+        if solref is not None:
+            mjs.geom(FLOOR).solref = solref
         base = mjs.body(self.fit.model.body(self.fit.base).name)
         if not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in base.joints):
             base.add_freejoint()

@@ -115,13 +115,15 @@ class SoftFloor:
 
     @classmethod
     def of_scene(cls, model: mujoco.MjModel) -> SoftFloor:
-        """The constants of a compiled scene's foot contacts (the floor and the feet share
-        ``solref`` and ``solimp``: MuJoCo mixes the two geoms' values; equal, they are these)."""
-        geom = model.geom(FOOT_GEOMS[0])
-        timeconst, dampratio = (float(v) for v in model.geom_solref[geom.id])
-        d0, d_max, width, midpoint, power = (float(v) for v in model.geom_solimp[geom.id][:5])
+        """The constants of a compiled scene's foot contacts: the floor's ``solref`` and
+        ``solimp`` (its ``priority`` 1 makes them the contact's, ``model.py``; the spec's
+        ``[contact]``), the left foot's inverse mass."""
+        floor = model.geom("floor").id
+        timeconst, dampratio = (float(v) for v in model.geom_solref[floor])
+        d0, d_max, width, midpoint, power = (float(v) for v in model.geom_solimp[floor][:5])
         solimp = (d0, d_max, width, midpoint, power)
-        inverse_mass = float(model.body_invweight0[model.geom_bodyid[geom.id], 0])
+        foot = model.geom(FOOT_GEOMS[0])
+        inverse_mass = float(model.body_invweight0[model.geom_bodyid[foot.id], 0])
         return cls(timeconst, dampratio, solimp, inverse_mass)
 
     @property

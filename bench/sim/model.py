@@ -17,8 +17,10 @@ vertical). ``stance_rooted_xml`` re-roots it at the stance foot for ``mj_inverse
 
 Contacts: condim 3 on an elliptic cone (the exact Coulomb cone, no pyramid facets),
 ``impratio`` 10 so sticking feet creep less; the floor has ``priority`` 1, so its
-friction is the contact's. Robot geoms (contype 0, conaffinity 1) touch the floor,
-never each other, so a fall shows as a non-foot contact.
+friction and ``solref`` are the contact's: the spec's ``[contact]`` (time constant, damping
+ratio), written only where it is not MuJoCo's default (0.02 s, 1), so a spec without the
+table gives the scene text it gave before the table existed. Robot geoms (contype 0,
+conaffinity 1) touch the floor, never each other, so a fall shows as a non-foot contact.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from slopewalk.planner.gait import MAX_SLOPE, GaitParams
 from slopewalk.planner.joints import JOINT_NAMES, LEFT, SIDE_PREFIX
 from slopewalk.planner.kinematics import rotation_slope_to_world
 from slopewalk.planner.ranges import FRICTION
-from slopewalk.planner.spec import JOINT_LIMIT_KEYS, RobotSpec, load_spec
+from slopewalk.planner.spec import CONTACT_DEFAULTS, JOINT_LIMIT_KEYS, RobotSpec, load_spec
 
 _SOLE_THICKNESS = 0.005  # foot box height [m]; its bottom face is the sole
 _LEG_RADIUS = 0.015  # thigh/shank capsule radius [m] (AX-12A is 32 mm wide)
@@ -141,6 +143,23 @@ def check_scene_options(*, slope: float, friction: float, actuators: str, timest
         raise SceneError(f"timestep {timestep!r} s: must be > 0")
 
 
+def check_contact_step(spec: RobotSpec, timestep: float) -> None:
+    """Raise one SceneError line where the spec's contact time constant is below 2 steps
+    (MuJoCo would silently stiffen the contact to 2 steps, not the spec's floor)."""
+    if not spec.contact_timeconst >= 2 * timestep:
+        raise SceneError(
+            f"contact.timeconst {spec.contact_timeconst!r} s of robot {spec.name!r}: must be "
+            f">= 2 time steps ({2 * timestep:g} s) at timestep {timestep:g} s"
+        )
+
+
+def contact_solref(spec: RobotSpec) -> list[float] | None:
+    """The floor's ``solref`` [τ s, ζ] for the spec's ``[contact]``; None where it is
+    MuJoCo's default (the scene then leaves the attribute out)."""
+    pair = [spec.contact_timeconst, spec.contact_dampratio]
+    return None if pair == list(CONTACT_DEFAULTS.values()) else pair
+
+
 def robot_xml(spec: RobotSpec, *, actuators: str = DEFAULT_MODE) -> str:
     """MJCF text of the pelvis-rooted biped (see module doc)."""
     return compiled_xml(build_robot(spec, actuators=actuators))
@@ -194,6 +213,7 @@ def scene_xml(
     floor, and a sweep's trials share scenes): 1.3 ms a scene.
     """
     check_scene_options(slope=slope, friction=friction, actuators=actuators, timestep=timestep)
+    check_contact_step(spec, timestep)
     # repr of each float: -0.0 names its scene "-0 deg", a scene of its own
     key = (pickle.dumps(spec), *map(repr, map(float, (slope, friction, timestep))), actuators)
     if key in _SCENES:
@@ -215,6 +235,9 @@ def _scene_xml(spec: RobotSpec, slope: float, friction: float, actuators: str, t
     servo = servo_settings(spec, actuators)
     mjs = _new_spec(f"{spec.name} on {np.rad2deg(slope):.4g} deg")
     _add_world(mjs, slope=slope, friction=friction, timestep=timestep)
+    solref = contact_solref(spec)
+    if solref is not None:
+        mjs.geom("floor").solref = solref
     pelvis = _add_robot(mjs, spec, servo)
     # Stand the home pose on the tilted plane: its pelvis pose is in S; turn it into W.
     R = rotation_slope_to_world(slope)

@@ -126,40 +126,49 @@ def body_walk(plan: Plan, *, friction: float, actuators: str) -> Walk:
     return _body_walk(plan, servo_settings(plan.spec, actuators), *floor)
 
 
-def trial_floor(plan: Plan, *, friction: float, actuators: str) -> tuple[float, float]:
-    """The floor of the trial's scene: its corner stiffness [N/m] and contact time [s]
-    (``_floor_of``)."""
+def trial_floor(plan: Plan, *, friction: float, actuators: str) -> tuple[float, float, float]:
+    """The floor of the trial's scene: its corner stiffness [N/m], contact time [s] and
+    damping ratio [-] (``_floor_of``)."""
     return _floor_of(
         scene_xml(plan.spec, slope=plan.params.slope, friction=friction, actuators=actuators)
     )
 
 
 @once_per_plan
-def _body_walk(plan: Plan, servo: Servo, corner_stiffness: float, contact_time: float) -> Walk:
+def _body_walk(
+    plan: Plan, servo: Servo, corner_stiffness: float, contact_time: float, dampratio: float
+) -> Walk:
     """``whole_body.walk`` of ``plan`` under ``servo``'s loop on a floor of that corner
-    stiffness [N/m] and contact time [s]; once per plan object, servo and floor (a sweep's
-    trials of one plan at several frictions share it: the model has no friction)."""
+    stiffness [N/m], contact time [s] and damping ratio [-]; once per plan object, servo and
+    floor (a sweep's trials of one plan at several frictions share it: the model has no
+    friction)."""
     return whole_body.walk(
         plan,
         force_limit=servo.force_limit,
         corner_stiffness=corner_stiffness,
         contact_time=contact_time,
+        contact_dampratio=dampratio,
         **_loop_of(plan, servo),
     )
 
 
 @once_per_plan
 def _events_of(
-    plan: Plan, servo: Servo, made: int, floor_stiffness: float, contact_time: float
+    plan: Plan,
+    servo: Servo,
+    made: int,
+    floor_stiffness: float,
+    contact_time: float,
+    dampratio: float,
 ) -> tuple[list[PredictedEvent], np.ndarray]:
     """``verdict.events_but_slip`` of ``plan`` judged on its ``made``-th loop walk under
-    ``servo`` (``_loop_walk``) on a floor of that corner stiffness [N/m] and contact time
-    [s]: every predicted event but ``slip``, the one μ decides beside the loop walk, and the
-    support's rotation. Once per plan object, servo, walk and floor: the trials that share
-    a loop walk share these (``verdict.predict`` is ``with_slips`` of the two, the same
-    events in the same order)."""
+    ``servo`` (``_loop_walk``) on a floor of that corner stiffness [N/m], contact time [s]
+    and damping ratio [-]: every predicted event but ``slip``, the one μ decides beside the
+    loop walk, and the support's rotation. Once per plan object, servo, walk and floor: the
+    trials that share a loop walk share these (``verdict.predict`` is ``with_slips`` of the
+    two, the same events in the same order)."""
     loop_walk = _loop_walks(plan, servo)[made]
-    body = _body_walk(plan, servo, floor_stiffness, contact_time)
+    body = _body_walk(plan, servo, floor_stiffness, contact_time, dampratio)
     return events_but_slip(
         plan,
         walk=loop_walk,
@@ -265,9 +274,10 @@ def _ring_settle(plan: Plan, servo: Servo) -> np.ndarray | None:
 
 
 @lru_cache(maxsize=16)
-def _floor_of(xml: str) -> tuple[float, float]:
+def _floor_of(xml: str) -> tuple[float, float, float]:
     """The floor of the scene ``xml``: its corner stiffness [N/m] and its contact's time
-    constant [s], compiled once per scene text (a sweep's trials share a few scenes; the
-    compile cost ~2.5 ms a trial)."""
+    constant [s] and damping ratio [-], compiled once per scene text (a sweep's trials share
+    a few scenes; the compile cost ~2.5 ms a trial)."""
     scene = mujoco.MjModel.from_xml_string(xml)
-    return scene_corner_stiffness(scene), SoftFloor.of_scene(scene).timeconst
+    floor = SoftFloor.of_scene(scene)
+    return scene_corner_stiffness(scene), floor.timeconst, floor.dampratio

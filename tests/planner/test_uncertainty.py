@@ -25,7 +25,8 @@ def test_the_default_spec_states_a_range_for_its_estimates():
     keys = [u.key for u in values]
     # the estimates the spec's comments name: foot width, masses, joint limits, servo
     for key in ("geometry.foot_width", "links.pelvis.mass", "joint_limits.ankle_pitch.upper",
-                "servo.stall_torque", "servo.stiffness"):  # fmt: skip
+                "servo.stall_torque", "servo.stiffness", "contact.timeconst",
+                "contact.dampratio"):  # fmt: skip
         assert key in keys
     # the paper's lengths are given, not estimated
     assert "geometry.thigh" not in keys and "geometry.foot_length" not in keys
@@ -67,6 +68,10 @@ def test_spec_at_changes_one_value_only():
     assert limit.joint_limits["ankle_pitch"] == (-1.4, 1.3)
     assert limit.joint_limits["knee"] == spec.joint_limits["knee"]
     assert spec_at(spec, "servo.stall_torque", 1.2).stall_torque == 1.2
+    soft = spec_at(spec, "contact.timeconst", 0.04)
+    assert (soft.contact_timeconst, soft.contact_dampratio) == (0.04, spec.contact_dampratio)
+    assert soft.as_dict() == spec.as_dict() | {"contact_timeconst": 0.04}
+    assert spec_at(spec, "contact.dampratio", 0.5).contact_dampratio == 0.5
 
 
 def _refused(table) -> str:
@@ -92,6 +97,8 @@ def _refused(table) -> str:
         ({"geometry": {"foot_width": [-0.01, 0.07]}}, "uncertain.geometry.foot_width low end -0.01 m: geometry.foot_width"),  # noqa: E501
         ({"joint_limits": {"ankle_pitch": {"upper": [-1.5, 1.5]}}}, "uncertain.joint_limits.ankle_pitch.upper low end -1.5 rad: joint_limits.ankle_pitch"),  # noqa: E501
         ({"servo": {"stall_torque": [0.0, 1.6]}}, "low end 0 N m: servo.stall_torque"),
+        ({"contact": {"timeconst": [0.0, 0.04]}}, "uncertain.contact.timeconst low end 0 s: contact.timeconst"),  # noqa: E501
+        ({"contact": {"stiffness": [1, 2]}}, "unknown key uncertain.contact.stiffness"),
         ([1, 2], "uncertain = [1, 2]: must be a table [uncertain]"),
     ],
 )  # fmt: skip

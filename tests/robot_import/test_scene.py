@@ -71,3 +71,23 @@ def test_the_floor_feedforward_knows_every_corner_of_a_two_box_sole():
         for point in touching:  # each contact sits on a predicted corner (the sole sinks < 2 mm)
             gap = np.linalg.norm(corners[foot] - (point[:2] - centre), axis=1).min()
             assert gap < 2e-3, f"{side}: contact {point[:2]} is {gap * 1e3:.1f} mm off every corner"
+
+
+def test_the_specs_contact_is_the_floors_under_an_imported_model():
+    """A spec's ``[contact]`` (here set on the spec the map gives) is the solref of MuJoCo's
+    foot contacts on the model's own scene, and the floor feed-forward reads it back."""
+    scene = model_scene(*MODELS["walker"])
+    model, _ = held_at_first_pose(scene, _plan(scene), actuators="servo_ff", steps=10)
+    default = scene.floor(model)
+    assert (default.timeconst, default.dampratio) == (0.02, 1.0)
+    scene = replace(scene, spec=replace(scene.spec, contact_timeconst=0.04, contact_dampratio=0.5))
+    model, data = held_at_first_pose(scene, _plan(scene), actuators="servo_ff", steps=100)
+    assert data.ncon >= 6
+    for k in range(data.ncon):
+        assert tuple(data.contact[k].solref) == (0.04, 0.5)
+    floor = scene.floor(model)
+    assert (floor.timeconst, floor.dampratio) == (0.04, 0.5)
+
+
+def _plan(scene):
+    return plan_walk(scene.spec, replace(GaitParams.nominal(scene.spec, 1.0), steps=1))

@@ -1,6 +1,8 @@
 """The floor's give: the sole-corner stiffness derived from MuJoCo's solref/solimp
 against the tilt MuJoCo gives a standing robot under a known moment."""
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
@@ -28,9 +30,12 @@ def test_a_heavier_load_presses_deeper_and_stiffens_the_corner(spec):
     assert corner_stiffness(model, 100.0) > corner_stiffness(model, 1.0)
 
 
-def test_the_derived_stiffness_gives_the_tilt_mujoco_measures(spec):
+@pytest.mark.parametrize("contact", [(0.02, 1.0), (0.04, 1.0), (0.02, 0.5)])
+def test_the_derived_stiffness_gives_the_tilt_mujoco_measures(spec, contact):
     """Both feet flat, a pitch moment τ on the pelvis: the soles turn by τ / k_rot with
-    k_rot = k_c Σ (x_i − m)² over the 8 sole corners = 2 k_c L²."""
+    k_rot = k_c Σ (x_i − m)² over the 8 sole corners = 2 k_c L²; on the default contact,
+    a softer one and a stiffer one (the spec's ``[contact]``: τ [s], ζ)."""
+    spec = replace(spec, contact_timeconst=contact[0], contact_dampratio=contact[1])
     model = mujoco.MjModel.from_xml_string(scene_xml(spec, actuators="stiff"))
     data = mujoco.MjData(model)
     feet = [model.body(name).id for name in ("l_foot", "r_foot")]
