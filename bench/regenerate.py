@@ -101,9 +101,11 @@ _ENVELOPE = ("envelope.csv", "envelope.png", "boundaries.md", "convergence.csv",
 _FIDELITY = {"paper": 0.3, "dense": 1, "paper-noise": 1, "dense-noise": 3}  # minutes
 # the held-out sets (issue 22), reported apart: random gaits, other robots, every committed
 # envelope gait in every mode (629 gaits x 4 modes), CI's set, and the random and GA gaits
-# in the servo modes at the ends of the servo's estimated values (8 ends each)
+# in the servo modes at the ends of the servo's estimated values (8 ends each), and in
+# every mode at the ends of the floor contact's (4 ends each)
 _HELD_OUT = {"random": 1.5, "robots": 1.5, "ga": 6, "ci": 0.2, "random-spec-ends": 11,
-             "ga-spec-ends": 40, "ga-noise": 11}  # fmt: skip  # minutes on 2 cores
+             "ga-spec-ends": 40, "ga-noise": 11, "random-contact-ends": 4.5,
+             "ga-contact-ends": 30}  # fmt: skip  # minutes on 2 cores
 _TRIALS = (("2", "0", "1.0"), ("0.5", "0", "1.0"), ("0.4", "0", "1.0"), ("1", "15", "0.5"),
            ("1", "15", "1.0"), ("1", "30", "0.5"), ("1", "30", "1.0"))  # fmt: skip
 
@@ -282,7 +284,9 @@ def add_regenerate_parser(sub, command) -> None:
         "results/, in the order their inputs need (GA, envelopes, sweep, controllers, "
         "fidelity, reports, trials), and record for each file written the command and the "
         "versions of slopewalk, numpy, scipy, numba, mujoco and pymoo in "
-        "results/PROVENANCE.json. The whole run takes about two hours on 2 cores.",
+        "results/PROVENANCE.json. The whole run takes about "
+        f"{sum(s.minutes for s in STEPS if not s.manual) / 60:.1f} hours on 2 cores "
+        "(--list: each step's time).",
         "slopewalk regenerate --list",
         "slopewalk regenerate --only 'results/trials/*'",
         "slopewalk regenerate",
