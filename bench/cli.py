@@ -525,8 +525,10 @@ def _bands_parser(sub) -> None:
         "the high end of its range; write DIR/bands.csv and DIR/bands.md: the boundary at "
         "low / nominal / high per value, the band (min-max) per boundary and the value that "
         "moves it most (analytic boundaries); then MuJoCo walks the boundary gaits of the "
-        "nominal spec and of the value that moves each boundary most, in every actuator mode.",
+        "nominal spec and of the value that moves each boundary most, and of each value "
+        "--walk names, at both ends, in every actuator mode.",
         "slopewalk bands --workers 2",
+        "slopewalk bands --walk contact.timeconst --walk contact.dampratio",
         "slopewalk bands my_envelope.toml --robot my.toml --out runs/bands",
     )
     p.add_argument(
@@ -542,6 +544,14 @@ def _bands_parser(sub) -> None:
         type=integer(WORKERS),
         metavar="N",
         help=f"local worker processes, in {WORKERS} (default: all cores)",
+    )
+    p.add_argument(
+        "--walk",
+        action="append",
+        metavar="KEY",
+        help="also walk each boundary's gait in MuJoCo with this [uncertain] value at either "
+        "end (repeatable): for a value the analytic boundaries do not see, like the floor's "
+        "contact.timeconst",
     )
     add_robot_flag(p)
     p.set_defaults(run=commands.bands)

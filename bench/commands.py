@@ -745,11 +745,19 @@ def bands(args: argparse.Namespace) -> None:
     if not uncertain:
         path = args.robot or default_spec_path()
         raise EnvelopeError(f"robot spec {str(path)!r}: no [uncertain] table to take bands over")
+    walk = tuple(args.walk or ())
+    known = [u.key for u in uncertain]
+    for key in walk:
+        if key not in known:
+            raise EnvelopeError(
+                f"--walk {key}: not a value of the [uncertain] table of {robot} "
+                f"(known: {', '.join(known)})"
+            )
     out = check_output_dir(args.out or Path.cwd() / "results" / "envelope")
     out.mkdir(parents=True, exist_ok=True)
     rows, wall_s = run_bands(config, spec, uncertain, workers=args.workers)
     start = time.perf_counter()
-    played = play_boundaries(config, spec, report.picks(rows), workers=args.workers)
+    played = play_boundaries(config, spec, report.picks(rows, walk), workers=args.workers)
     checked = converge_boundaries(config, spec, report.picks(rows), workers=args.workers)
     wall_s += time.perf_counter() - start
     workers = args.workers or os.cpu_count() or 1

@@ -139,7 +139,7 @@ STEPS: tuple[Step, ...] = (
     *_optimize_steps(),
     # the bands before the envelope: its boundaries.md quotes results/envelope/bands.csv
     _step(
-        "slopewalk bands --workers 2",
+        "slopewalk bands --workers 2 --walk contact.timeconst --walk contact.dampratio",
         ("results/envelope/bands.csv", "results/envelope/bands.md"),
         15,
     ),  # fmt: skip

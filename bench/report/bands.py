@@ -123,17 +123,22 @@ def summaries(rows: list[dict]) -> list[dict]:
     return out
 
 
-def picks(rows: list[dict]) -> list[tuple[str, str, str, str, float, int]]:
+def picks(
+    rows: list[dict], walk: tuple[str, ...] = ()
+) -> list[tuple[str, str, str, str, float, int]]:
     """The boundary cells worth walking in MuJoCo, per family × boundary: the nominal spec's
     and, for the value that moves the boundary most (or, when none moves it, moves its
-    margin most), each end's; (family, boundary, key, end, value, index), no cell when
-    none is inside."""
+    margin most) and then for each key of ``walk`` (``--walk``: values the analytic
+    boundaries may not see, like the floor's contact), each end's; (family, boundary, key,
+    end, value, index), no cell when none is inside."""
     out = []
     for s in summaries(rows):
         top = s["movers"][0] if s["movers"] else s["closest"]
+        keys = [top, *(k for k in walk if k != top)]
         chosen = [s["nominal"]] + [
-            r for r in rows if r["family"] == s["family"] and r["boundary"] == s["boundary"]
-            and r["key"] == top and r["end"] != "nominal"
+            r for key in keys for r in rows
+            if r["family"] == s["family"] and r["boundary"] == s["boundary"]
+            and r["key"] == key and r["end"] != "nominal"
         ]  # fmt: skip
         for r in chosen:
             if r["index"] >= 0:
@@ -150,7 +155,8 @@ def played_lines(played: list[dict]) -> list[str]:
         "searches, the max-margin gait re-planned at 1 ms and played open loop in every "
         "actuator mode, with the spec as changed; its margin pools both searches, so it may "
         "exceed the table's), for the value that moves each boundary most (or its margin, "
-        "when none moves it a cell); the balance verdict, and in brackets the strict walk "
+        "when none moves it a cell) and for those `--walk` names, at each end; the balance "
+        "verdict, and in brackets the strict walk "
         "verdict where it differs (`walked` needs the plan walked within the servo's stall "
         "torque, `docs/verdicts.md`):",
         "",

@@ -129,6 +129,9 @@ def test_the_command_refuses_a_bad_range_or_no_table_in_one_line(tmp_path, capsy
     plain.write_text(text[: text.index("[uncertain]")])
     err = _refused(["bands", "--robot", str(plain), "--out", str(tmp_path / "o")], capsys)
     assert "no [uncertain] table" in err
+    err = _refused(["bands", "--walk", "contact.stiffness", "--out", str(tmp_path / "o")], capsys)
+    assert "--walk contact.stiffness: not a value of the [uncertain] table of" in err
+    assert "contact.timeconst" in err  # the known keys are named
     assert not (tmp_path / "o").exists()
 
 

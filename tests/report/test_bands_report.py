@@ -142,6 +142,19 @@ def test_the_gaits_walked_are_the_nominal_and_the_top_movers_ends():
     ]
     # none moves the downhill boundary: the value that moves its margin most
     assert [c[2] for c in chosen if c[1] == "down"][1:] == ["geometry.foot_width"] * 2
+    # --walk adds a value's ends after the top mover's, each at its own boundary cell, and
+    # never walks the top mover twice
+    walked = bands.picks(ROWS, ("links.pelvis.mass", "geometry.foot_width"))
+    assert [c for c in walked if c[1] == "flat"] == chosen[:3] + [
+        ("paper", "flat", "links.pelvis.mass", "low", 0.21, 7),
+        ("paper", "flat", "links.pelvis.mass", "high", 0.27, 6),
+    ]
+    # uphill: no row of the pelvis mass, so only the foot width's ends are added
+    assert [c for c in walked if c[1] == "up"] == [*up, ("paper", "up", "geometry.foot_width",
+                                                      "low", 0.05, 7),
+                                                   ("paper", "up", "geometry.foot_width",
+                                                    "high", 0.07, 7)]  # fmt: skip
+    assert len(walked) == len(chosen) + 6  # and downhill, the pelvis mass's two ends
     played = [{"family": "paper", "boundary": "flat", "key": "geometry.foot_width",
                "end": "low", "value": 0.05, "step_time": 0.9, "slope_deg": 0.0,
                "margin_mm": 3.71, "verdicts": {"stiff": "stable", "servo": "tip"}}]  # fmt: skip
