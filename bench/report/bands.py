@@ -123,6 +123,11 @@ def summaries(rows: list[dict]) -> list[dict]:
     return out
 
 
+def _unit(row: dict) -> str:
+    """The unit of a row's value after a space; nothing for a value without one (a ratio)."""
+    return f" {row['unit']}" if row["unit"] else ""
+
+
 def picks(
     rows: list[dict], walk: tuple[str, ...] = ()
 ) -> list[tuple[str, str, str, str, float, int]]:
@@ -215,18 +220,18 @@ def _mover_text(s: dict, rows: list[dict]) -> str:
         return (
             f"no value moves it a grid cell; its margin there ({nominal:+.1f} mm) moves most "
             f"with {s['closest']} ({e['low']['nominal_cell_margin_mm']:+.1f} mm at "
-            f"{float(e['low']['value']):g} {e['low']['unit']}, "
-            f"{e['high']['nominal_cell_margin_mm']:+.1f} mm at {float(e['high']['value']):g} "
-            f"{e['high']['unit']})"
+            f"{float(e['low']['value']):g}{_unit(e['low'])}, "
+            f"{e['high']['nominal_cell_margin_mm']:+.1f} mm at {float(e['high']['value']):g}"
+            f"{_unit(e['high'])})"
         )
     parts = []
     for key in s["movers"]:
         e = ends(key)
         low, high = e["low"], e["high"]
         parts.append(
-            f"{key} ({_show(low['at'], s['boundary'])} at {float(low['value']):g} "
-            f"{low['unit']}, {_show(high['at'], s['boundary'])} at "
-            f"{float(high['value']):g} {high['unit']}; margin at the nominal boundary "
+            f"{key} ({_show(low['at'], s['boundary'])} at {float(low['value']):g}"
+            f"{_unit(low)}, {_show(high['at'], s['boundary'])} at "
+            f"{float(high['value']):g}{_unit(high)}; margin at the nominal boundary "
             f"{low['nominal_cell_margin_mm']:+.1f} / {nominal:+.1f} / "
             f"{high['nominal_cell_margin_mm']:+.1f} mm)"
         )
@@ -301,8 +306,8 @@ def markdown(rows: list[dict], *, source: str, robot: str, spec: RobotSpec, sear
         n = nominal[family, boundary]
         mark = {e: " **" if r["index"] != n["index"] else "" for e, r in ends.items()}
         lines.append(
-            f"| {family} | {boundary} | {key} | [{float(low['low']):g}, {float(low['high']):g}] "
-            f"{low['unit']} | {_show(low['at'], boundary, low['edge'])}{mark['low']} | "
+            f"| {family} | {boundary} | {key} | [{float(low['low']):g}, {float(low['high']):g}]"
+            f"{_unit(low)} | {_show(low['at'], boundary, low['edge'])}{mark['low']} | "
             f"{_show(n['at'], boundary, n['edge'])} | "
             f"{_show(high['at'], boundary, high['edge'])}{mark['high']} | "
             f"{low['nominal_cell_margin_mm']:+.1f} / {n['nominal_cell_margin_mm']:+.1f} / "
