@@ -443,9 +443,8 @@ SERVO = {
     "armature": Range(0.0, 1e3, "kg m^2", low_open=False),
     "friction_loss": Range(0.0, 1e4, "N m", low_open=False),
 }
-# [contact]: a time constant from a stiff floor's 1 ms to a mattress's 1 s (MuJoCo keeps it
-# at 2 steps at least: the scene refuses one below that); a damping ratio from a bouncing
-# to a dead landing
+# [contact]: a time constant up to a mattress's 1 s (MuJoCo keeps it at 2 steps at least:
+# the scene refuses one shorter than that); a damping ratio from a bouncing to a dead landing
 CONTACT = {"timeconst": Range(0.0, 1.0, "s"), "dampratio": Range(0.0, 100.0, "")}
 MASS_SCALE = Range(0.0, 1e3)
 FINITE_INERTIA = Range(-math.inf, math.inf, "kg m^2")
