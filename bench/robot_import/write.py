@@ -3,7 +3,10 @@
 ``imported_spec`` turns a ``Fit`` into the spec's tables (``planner.spec``): geometry
 from the fit, links from ``lump``, joint limits from the model's ranges (the default
 robot's where it has none, said so), servo constants from the actuators of the planned
-joints (the map's ``[servo]``, else the default robot's, where the model has none).
+joints (the map's ``[servo]``, else the default robot's, where the model has none), and
+the soles' own ``solref`` as ``[contact]`` where the model sets one (the trial's floor,
+whose priority makes its contact the pair's, then takes it; without the table MuJoCo's
+default would replace the model's).
 ``spec_toml`` writes it with 17 significant digits, so it reads back as the same
 doubles. ``report_lines`` lists every approximation with its size.
 """
@@ -19,7 +22,14 @@ from slopewalk.bench.robot_import.fit import Fit
 from slopewalk.bench.robot_import.footprint import SYMMETRY_TOLERANCE, spec_polygon
 from slopewalk.bench.robot_import.lump import LEG_LINKS, lump_links, mirrored
 from slopewalk.bench.robot_import.mapfile import SIDES, RobotMap
-from slopewalk.planner.spec import JOINT_LIMIT_KEYS, LINK_NAMES, SERVO, load_spec, spec_from_dict
+from slopewalk.planner.spec import (
+    CONTACT_DEFAULTS,
+    JOINT_LIMIT_KEYS,
+    LINK_NAMES,
+    SERVO,
+    load_spec,
+    spec_from_dict,
+)
 
 
 def imported_spec(fit: Fit, robot_map: RobotMap | None = None) -> tuple[dict, list[str]]:
@@ -52,12 +62,38 @@ def imported_spec(fit: Fit, robot_map: RobotMap | None = None) -> tuple[dict, li
         "joint_limits": _limits(fit, notes),
         "servo": _servo(fit, robot_map, notes),
     }
+    contact = _contact(fit, notes)
+    if contact is not None:
+        data["contact"] = contact
     polygon, _ = spec_polygon(fit.footprints["left"], fit.sole["left"])
     if polygon is not None:
         geometry["sole_polygon"] = polygon
     notes += _geometry_notes(fit)
     spec_from_dict(data, source=f"imported from {fit.path}")  # refuses a non-physical result
     return data, notes
+
+
+def _contact(fit: Fit, notes: list[str]) -> dict[str, float] | None:
+    """The soles' ``solref`` (time constant [s], damping ratio) as the spec's [contact];
+    None where every sole geom keeps MuJoCo's default, or where they differ or use MuJoCo's
+    direct (negative) form, which the spec cannot state (said so in ``notes``)."""
+    pairs = {
+        (float(fit.model.geom_solref[g][0]), float(fit.model.geom_solref[g][1]))
+        for side in SIDES
+        for g in fit.soles[side]
+    }
+    default = (CONTACT_DEFAULTS["timeconst"], CONTACT_DEFAULTS["dampratio"])
+    if pairs <= {default}:
+        return None
+    if len(pairs) > 1 or min(min(p) for p in pairs) <= 0:
+        notes.append(
+            f"contact: the soles' solref {sorted(pairs)} differ or are in MuJoCo's direct "
+            f"form; the spec keeps MuJoCo's default {list(default)}"
+        )
+        return None
+    ((timeconst, dampratio),) = pairs
+    notes.append(f"contact: the soles' own solref, {timeconst:g} s and {dampratio:g}")
+    return {"timeconst": timeconst, "dampratio": dampratio}
 
 
 def _limits(fit: Fit, notes: list[str]) -> dict[str, list[float]]:
@@ -210,8 +246,9 @@ def spec_toml(data: dict, header: list[str]) -> str:
     for name in LINK_NAMES:
         lines += ["", f"[links.{name}]"]
         lines += [f"{k} = {_num(v)}" for k, v in data["links"][name].items()]
-    for table in ("joint_limits", "servo"):
-        lines += ["", f"[{table}]"] + [f"{k} = {_num(v)}" for k, v in data[table].items()]
+    for table in ("joint_limits", "servo", "contact"):
+        if table in data:
+            lines += ["", f"[{table}]"] + [f"{k} = {_num(v)}" for k, v in data[table].items()]
     return "\n".join(lines) + "\n"
 
 

@@ -91,3 +91,31 @@ def test_the_specs_contact_is_the_floors_under_an_imported_model():
 
 def _plan(scene):
     return plan_walk(scene.spec, replace(GaitParams.nominal(scene.spec, 1.0), steps=1))
+
+
+def test_an_imported_models_own_sole_contact_is_the_trials(tmp_path):
+    """A model whose soles set their own ``solref``: the import writes it as the spec's
+    [contact] (one without keeps none), and the trial's floor, whose priority would put
+    MuJoCo's default in its place, takes it: MuJoCo's foot contacts carry the model's."""
+    from slopewalk.bench.robot_import.write import import_robot
+    from slopewalk.planner.spec import load_spec
+
+    walker, walker_map = MODELS["walker"]
+    text, notes = import_robot(walker, walker_map)
+    assert "[contact]" not in text and not any(n.startswith("contact") for n in notes)
+    own = tmp_path / "walker.xml"
+    sole = '<geom type="box" contype="1" conaffinity="1"'
+    assert sole in walker.read_text()
+    own.write_text(walker.read_text().replace(sole, sole + ' solref="0.03 0.8"'))
+    text, notes = import_robot(own, walker_map)
+    assert "contact: the soles' own solref, 0.03 s and 0.8" in notes
+    spec_path = tmp_path / "walker.toml"
+    spec_path.write_text(text)
+    spec = load_spec(spec_path)
+    assert (spec.contact_timeconst, spec.contact_dampratio) == (0.03, 0.8)
+    scene = model_scene(own, walker_map)  # the spec the import writes
+    assert scene.spec == spec
+    model, data = held_at_first_pose(scene, _plan(scene), actuators="servo_ff", steps=100)
+    assert data.ncon >= 6
+    for k in range(data.ncon):
+        assert tuple(data.contact[k].solref) == (0.03, 0.8)
