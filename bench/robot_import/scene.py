@@ -118,7 +118,7 @@ class ModelScene:
             )
         mjs = mujoco.MjSpec.from_file(self.fit.path)
         mjs.option.timestep = timestep
-        mjs.worldbody.add_geom(
+        floor = mjs.worldbody.add_geom(
             name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
             quat=_quat(rotation_slope_to_world(plan.params.slope)),
             friction=[friction, 0.005, 0.0001], condim=3, priority=1, contype=1, conaffinity=1,
@@ -126,7 +126,7 @@ class ModelScene:
         check_contact_step(self.spec, timestep)
         solref = contact_solref(self.spec)
         if solref is not None:
-            mjs.geom(FLOOR).solref = solref
+            floor.solref = solref
         base = mjs.body(self.fit.model.body(self.fit.base).name)
         if not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in base.joints):
             base.add_freejoint()

@@ -234,10 +234,8 @@ def _scene_xml(spec: RobotSpec, slope: float, friction: float, actuators: str, t
     """``scene_xml``, built."""
     servo = servo_settings(spec, actuators)
     mjs = _new_spec(f"{spec.name} on {np.rad2deg(slope):.4g} deg")
-    _add_world(mjs, slope=slope, friction=friction, timestep=timestep)
-    solref = contact_solref(spec)
-    if solref is not None:
-        mjs.geom("floor").solref = solref
+    _add_world(mjs, slope=slope, friction=friction, timestep=timestep,
+               solref=contact_solref(spec))  # fmt: skip
     pelvis = _add_robot(mjs, spec, servo)
     # Stand the home pose on the tilted plane: its pelvis pose is in S; turn it into W.
     R = rotation_slope_to_world(slope)
@@ -357,8 +355,16 @@ def _new_spec(name: str) -> mujoco.MjSpec:
     return mjs
 
 
-def _add_world(mjs: mujoco.MjSpec, *, slope: float, friction: float, timestep: float) -> None:
-    """Options, floor texture, light and the tilted floor plane (its pose is S in the world)."""
+def _add_world(
+    mjs: mujoco.MjSpec,
+    *,
+    slope: float,
+    friction: float,
+    timestep: float,
+    solref: list[float] | None = None,
+) -> None:
+    """Options, floor texture, light and the tilted floor plane (its pose is S in the world),
+    with ``solref`` (``contact_solref``; None: MuJoCo's default, left out of the text)."""
     mjs.option.timestep = timestep
     mjs.option.integrator = INTEGRATOR
     mjs.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -371,11 +377,13 @@ def _add_world(mjs: mujoco.MjSpec, *, slope: float, friction: float, timestep: f
     mjs.worldbody.add_light(
         name="sun", pos=[0, 0, 2], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
     )
-    mjs.worldbody.add_geom(
+    floor = mjs.worldbody.add_geom(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="grid",
         quat=_quat(rotation_slope_to_world(slope)), friction=[friction, 0.005, 0.0001],
         condim=3, priority=1,
     )  # fmt: skip
+    if solref is not None:
+        floor.solref = solref
 
 
 def _add_robot(mjs: mujoco.MjSpec, spec: RobotSpec, servo: Servo) -> mujoco.MjsBody:
