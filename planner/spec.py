@@ -38,6 +38,10 @@ OPTIONAL_GEOMETRY: dict[str, Any] = {"sole_offset": 0.0, "knee_offset": 0.0, "so
 # the optional [contact] table: the soles' contact with the floor, MuJoCo's ``solref`` (time
 # constant [s], damping ratio [-]); absent, MuJoCo's defaults, which every scene used before
 CONTACT_DEFAULTS: dict[str, float] = {"timeconst": 0.02, "dampratio": 1.0}
+# the optional [servo] key ``damping``: the joint's viscous damping [N m s/rad]; absent, the
+# motor's back-EMF alone, stall_torque / no_load_speed (``RobotSpec.joint_damping``), which
+# every scene and prediction used before the key existed
+OPTIONAL_SERVO: dict[str, float | None] = {"damping": None}
 
 
 @dataclass(frozen=True)
@@ -112,6 +116,9 @@ class RobotSpec:
             give with the foot's mass); 0.02 is MuJoCo's default.
         contact_dampratio: Damping ratio ζ of that contact [-] (``solref[1]``; below 1 a
             landing bounces); 1 is MuJoCo's default.
+        damping: The servo joint's viscous damping [N m s/rad] (MuJoCo's joint ``damping``,
+            the loop's d); None: the motor's back-EMF alone, stall_torque / no_load_speed
+            (``joint_damping`` is the value used either way).
     """
 
     name: str
@@ -135,6 +142,7 @@ class RobotSpec:
     sole_polygon: tuple[tuple[float, float], ...] | None = None
     contact_timeconst: float = CONTACT_DEFAULTS["timeconst"]
     contact_dampratio: float = CONTACT_DEFAULTS["dampratio"]
+    damping: float | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -169,6 +177,17 @@ class RobotSpec:
             allowed.check(f"servo.{key}", getattr(self, key), SpecError)
         for key, allowed in CONTACT.items():
             allowed.check(f"contact.{key}", getattr(self, f"contact_{key}"), SpecError)
+        if self.damping is not None:
+            DAMPING.check("servo.damping", self.damping, SpecError)
+
+    @property
+    def joint_damping(self) -> float:
+        """The servo joint's viscous damping d [N m s/rad]: ``damping`` where the spec gives
+        it, else the motor's back-EMF, stall_torque / no_load_speed (a DC motor's torque
+        falls linearly from stall to zero at the no-load speed)."""
+        if self.damping is not None:
+            return float(self.damping)
+        return self.stall_torque / self.no_load_speed
 
     @property
     def heel_offset(self) -> float:
@@ -176,13 +195,17 @@ class RobotSpec:
         return self.foot_length - self.ankle_to_toe
 
     def as_dict(self) -> dict[str, Any]:
-        """The spec's fields as plain data; an optional geometry or contact key at its default
-        is left out, so a spec without it is written (and identified) as before the key
-        existed."""
+        """The spec's fields as plain data; an optional geometry, contact or servo key at its
+        default is left out, so a spec without it is written (and identified) as before the
+        key existed."""
         from dataclasses import asdict
 
         d = asdict(self)
-        optional = {**OPTIONAL_GEOMETRY, **{f"contact_{k}": v for k, v in CONTACT_DEFAULTS.items()}}
+        optional = {
+            **OPTIONAL_GEOMETRY,
+            **{f"contact_{k}": v for k, v in CONTACT_DEFAULTS.items()},
+            **OPTIONAL_SERVO,
+        }
         for key, default in optional.items():
             if d[key] == default:
                 del d[key]
@@ -349,7 +372,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
     _known(geometry, GEOMETRY_KEYS + tuple(OPTIONAL_GEOMETRY), "geometry.")
     _known(links_table, LINK_NAMES, "links.")
     _known(limits, JOINT_LIMIT_KEYS, "joint_limits.")
-    _known(servo, tuple(SERVO), "servo.")
+    _known(servo, tuple(SERVO) + tuple(OPTIONAL_SERVO), "servo.")
     contact = data.get("contact", {})
     if not isinstance(contact, dict):
         raise SpecError(f"contact = {contact!r}: must be a table [contact]")
@@ -372,6 +395,7 @@ def _spec_from_dict(data: dict[str, Any], source: str) -> RobotSpec:
         links=links,
         joint_limits=joint_limits,
         **{key: _number(servo, key, "servo") for key in SERVO},
+        **{key: _float(servo.get(key, default)) for key, default in OPTIONAL_SERVO.items()},
         **{
             f"contact_{key}": _float(contact.get(key, default))
             for key, default in CONTACT_DEFAULTS.items()
@@ -443,6 +467,7 @@ SERVO = {
     "armature": Range(0.0, 1e3, "kg m^2", low_open=False),
     "friction_loss": Range(0.0, 1e4, "N m", low_open=False),
 }
+DAMPING = Range(0.0, 1e4, "N m s/rad", low_open=False)  # [servo] damping, where given
 # [contact]: a time constant up to a mattress's 1 s (MuJoCo keeps it at 2 steps at least:
 # the scene refuses one shorter than that); a damping ratio from a bouncing to a dead landing
 CONTACT = {"timeconst": Range(0.0, 1.0, "s"), "dampratio": Range(0.0, 100.0, "")}

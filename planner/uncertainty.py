@@ -13,7 +13,9 @@ Keys address one number of the spec, dotted as the TOML tables are:
 * ``links.<link>.mass`` [kg] (the link's inertia scales with it: a heavier part of the
   same shape), ``links.<link>.com.x|y|z`` [m];
 * ``joint_limits.<kind>.lower|upper`` [rad];
-* ``servo.<key>`` (e.g. ``servo.stall_torque``) in its unit;
+* ``servo.<key>`` (e.g. ``servo.stall_torque``) in its unit; ``servo.damping`` [N m s/rad]
+  is the joint's viscous damping (the motor's back-EMF, stall_torque / no_load_speed, where
+  the spec's ``[servo]`` gives none);
 * ``contact.timeconst`` [s], ``contact.dampratio`` [-]: the soles' contact with the floor
   (the spec's ``[contact]``, MuJoCo's ``solref``; its defaults where the spec has none).
 
@@ -36,9 +38,11 @@ from slopewalk.planner.errors import SpecError
 from slopewalk.planner.ranges import show
 from slopewalk.planner.spec import (
     CONTACT,
+    DAMPING,
     GEOMETRY_KEYS,
     JOINT_LIMIT_KEYS,
     LINK_NAMES,
+    OPTIONAL_SERVO,
     SERVO,
     LinkInertial,
     RobotSpec,
@@ -78,7 +82,7 @@ def known_keys(spec: RobotSpec) -> tuple[str, ...]:
     for link in LINK_NAMES:
         keys += [f"links.{link}.mass", *(f"links.{link}.com.{a}" for a in _AXES)]
     keys += [f"joint_limits.{kind}.{end}" for kind in JOINT_LIMIT_KEYS for end in _ENDS]
-    keys += [f"servo.{k}" for k in SERVO]
+    keys += [f"servo.{k}" for k in (*SERVO, *OPTIONAL_SERVO)]
     keys += [f"contact.{k}" for k in CONTACT]
     return tuple(keys)
 
@@ -97,6 +101,8 @@ def value_of(spec: RobotSpec, key: str) -> tuple[float, str]:
         return spec.joint_limits[part[1]][_ENDS.index(part[2])], "rad"
     if part[0] == "contact":
         return float(getattr(spec, f"contact_{part[1]}")), CONTACT[part[1]].unit
+    if key == "servo.damping":  # the back-EMF's where the spec gives none
+        return spec.joint_damping, DAMPING.unit
     return float(getattr(spec, part[1])), SERVO[part[1]].unit
 
 
@@ -104,10 +110,13 @@ def spec_at(spec: RobotSpec, key: str, value: float) -> RobotSpec:
     """A copy of ``spec`` with the one value ``key`` set to ``value`` (its SI unit).
 
     A link's mass scales its inertia by the same factor (the same part, heavier). The
-    copy is checked as any spec is (``SpecError`` for a value it refuses).
+    copy is checked as any spec is (``SpecError`` for a value it refuses). At the spec's
+    own value it is ``spec`` itself (a damping the back-EMF implies stays implied).
     """
     if key not in known_keys(spec):
         raise SpecError(f"{TABLE}.{key}: not a value of the spec")
+    if value_of(spec, key)[0] == value:  # e.g. the back-EMF's damping stays implied
+        return spec
     part = key.split(".")
     if part[0] in ("geometry", "servo", "contact"):
         field = f"contact_{part[1]}" if part[0] == "contact" else part[1]

@@ -166,7 +166,7 @@ class ModelScene:
             act.forcerange = [-spec.stall_torque, spec.stall_torque]
             motor = mjs.joint(joint)  # the rotor adds to the joint's own (URDF <dynamics>)
             motor.armature += spec.armature
-            damping = spec.stall_torque / spec.no_load_speed  # back-EMF (``servo_settings``)
+            damping = spec.joint_damping  # the spec's, or its back-EMF (``servo_settings``)
             if np.ndim(motor.damping):  # MuJoCo 4: polynomial coefficients; 3.x: a number
                 motor.damping = np.asarray(motor.damping) + [damping, 0.0, 0.0]
             else:

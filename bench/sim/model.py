@@ -79,9 +79,10 @@ class Servo:
 # ---- Simulation settings: the one place they live (robot numbers live in the spec). ----
 # The servo's constants (kp, kv, armature, friction loss, torque limit) are the spec's
 # [servo] table; for the default spec the AX-12A's, with their sources in bioloid.toml.
-# Servo joint damping = stall torque / no-load speed: the slope of a DC motor's
-# torque-speed line (back-EMF), present with or without a command (for the XM430 this
-# rule gives 0.85 N m s/rad; the OP3's identified value is 1.08).
+# Servo joint damping = the spec's [servo] damping, or where it has none stall torque /
+# no-load speed: the slope of a DC motor's torque-speed line (back-EMF), present with or
+# without a command (for the XM430 this rule gives 0.85 N m s/rad; the OP3's identified
+# value is 1.08: the gear train adds; RobotSpec.joint_damping).
 #
 # stiff: a stiff, unsaturated position loop that tracks the plan closely, for validating
 # the analytic model. It keeps the servo's armature: with a 1 ms step and no rotor
@@ -126,7 +127,7 @@ def servo_settings(spec: RobotSpec, actuators: str) -> Servo:
         kp=spec.stiffness,
         kv=spec.velocity_gain,
         force_limit=spec.stall_torque,
-        damping=spec.stall_torque / spec.no_load_speed,
+        damping=spec.joint_damping,
         armature=spec.armature,
         frictionloss=spec.friction_loss,
         feedforward=feedforward,

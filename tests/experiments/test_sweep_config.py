@@ -183,9 +183,10 @@ def test_trial_id_is_the_hash_of_the_inputs_and_the_spec(tmp_path, short_robot):
             "steps": trial.steps,
             "seed": trial.seed,
             "timestep": TIMESTEP,
-            # every field, but the optional geometry and contact keys at their default
-            # (sole_offset, knee_offset 0, no sole_polygon, contact 0.02 s and 1) left out,
-            # so the ids of robots written before them do not move
+            # every field, but the optional geometry, contact and servo keys at their
+            # default (sole_offset, knee_offset 0, no sole_polygon, contact 0.02 s and 1, no
+            # damping: the back-EMF's) left out, so the ids of robots written before them
+            # do not move
             "spec": {
                 k: v
                 for k, v in asdict(trial.spec).items()
@@ -196,12 +197,14 @@ def test_trial_id_is_the_hash_of_the_inputs_and_the_spec(tmp_path, short_robot):
                     "sole_polygon",
                     "contact_timeconst",
                     "contact_dampratio",
+                    "damping",
                 )  # fmt: skip
             },
         }
         assert trial.spec.sole_offset == 0.0 and trial.spec.knee_offset == 0.0
         assert trial.spec.sole_polygon is None
         assert (trial.spec.contact_timeconst, trial.spec.contact_dampratio) == (0.02, 1.0)
+        assert trial.spec.damping is None
         text = json.dumps(key, sort_keys=True, default=float)
         assert trial.trial_id == hashlib.sha256(text.encode()).hexdigest()[:12]
 

@@ -25,7 +25,7 @@ def test_the_default_spec_states_a_range_for_its_estimates():
     keys = [u.key for u in values]
     # the estimates the spec's comments name: foot width, masses, joint limits, servo
     for key in ("geometry.foot_width", "links.pelvis.mass", "joint_limits.ankle_pitch.upper",
-                "servo.stall_torque", "servo.stiffness", "contact.timeconst",
+                "servo.stall_torque", "servo.stiffness", "servo.damping", "contact.timeconst",
                 "contact.dampratio"):  # fmt: skip
         assert key in keys
     # the paper's lengths are given, not estimated
@@ -72,6 +72,11 @@ def test_spec_at_changes_one_value_only():
     assert (soft.contact_timeconst, soft.contact_dampratio) == (0.04, spec.contact_dampratio)
     assert soft.as_dict() == spec.as_dict() | {"contact_timeconst": 0.04}
     assert spec_at(spec, "contact.dampratio", 0.5).contact_dampratio == 0.5
+    # the joint damping: the back-EMF's where the spec gives none, the key's once moved
+    assert value_of(spec, "servo.damping") == (spec.stall_torque / spec.no_load_speed, "N m s/rad")
+    damped = spec_at(spec, "servo.damping", 0.56)
+    assert (damped.joint_damping, damped.stall_torque) == (0.56, spec.stall_torque)
+    assert damped.as_dict() == spec.as_dict() | {"damping": 0.56}
 
 
 def _refused(table) -> str:
@@ -99,6 +104,8 @@ def _refused(table) -> str:
         ({"servo": {"stall_torque": [0.0, 1.6]}}, "low end 0 N m: servo.stall_torque"),
         ({"contact": {"timeconst": [0.0, 0.04]}}, "uncertain.contact.timeconst low end 0 s: contact.timeconst"),  # noqa: E501
         ({"contact": {"stiffness": [1, 2]}}, "unknown key uncertain.contact.stiffness"),
+        ({"servo": {"damping": [0.3, 0.5]}}, "must hold the spec's value 0.242718 N m s/rad"),
+        ({"servo": {"damping": [-0.1, 0.5]}}, "uncertain.servo.damping low end -0.1 N m s/rad: servo.damping"),  # noqa: E501
         ([1, 2], "uncertain = [1, 2]: must be a table [uncertain]"),
     ],
 )  # fmt: skip

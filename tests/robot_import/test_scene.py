@@ -119,3 +119,17 @@ def test_an_imported_models_own_sole_contact_is_the_trials(tmp_path):
     assert data.ncon >= 6
     for k in range(data.ncon):
         assert tuple(data.contact[k].solref) == (0.03, 0.8)
+
+
+def test_the_specs_damping_is_what_the_added_servos_give_a_motors_only_model():
+    """A motors-only URDF's joints get the servo the scene adds: its rotor and its damping,
+    the spec's ``[servo] damping`` where given (here set on the spec the map gives), else the
+    back-EMF's, on top of the URDF's own ``<dynamics>``."""
+    scene = model_scene(*MODELS["walker_motors"])
+    base, _ = held_at_first_pose(scene, _plan(scene), actuators="servo", steps=1)
+    moved = replace(scene, spec=replace(scene.spec, damping=0.5))
+    model, _ = held_at_first_pose(moved, _plan(moved), actuators="servo", steps=1)
+    for name, _ in scene.joints():
+        dof = model.jnt_dofadr[model.joint(name).id]
+        added = model.dof_damping[dof] - base.dof_damping[dof]
+        assert added == pytest.approx(0.5 - scene.spec.joint_damping, abs=1e-9)
