@@ -102,10 +102,12 @@ _FIDELITY = {"paper": 0.3, "dense": 1, "paper-noise": 1, "dense-noise": 3}  # mi
 # the held-out sets (issue 22), reported apart: random gaits, other robots, every committed
 # envelope gait in every mode (629 gaits x 4 modes), CI's set, and the random and GA gaits
 # in the servo modes at the ends of the servo's estimated values (8 ends each), and in
-# every mode at the ends of the floor contact's (4 ends each)
+# every mode at the ends of the floor contact's (4 ends each), and in the servo modes at the
+# ends of the joint damping (2 ends each)
 _HELD_OUT = {"random": 1.5, "robots": 1.5, "ga": 6, "ci": 0.2, "random-spec-ends": 11,
              "ga-spec-ends": 40, "ga-noise": 11, "random-contact-ends": 4.5,
-             "ga-contact-ends": 16}  # fmt: skip  # minutes on 2 cores
+             "ga-contact-ends": 16, "random-damping-ends": 1,
+             "ga-damping-ends": 5}  # fmt: skip  # minutes on 2 cores
 _TRIALS = (("2", "0", "1.0"), ("0.5", "0", "1.0"), ("0.4", "0", "1.0"), ("1", "15", "0.5"),
            ("1", "15", "1.0"), ("1", "30", "0.5"), ("1", "30", "1.0"))  # fmt: skip
 
@@ -139,7 +141,8 @@ STEPS: tuple[Step, ...] = (
     *_optimize_steps(),
     # the bands before the envelope: its boundaries.md quotes results/envelope/bands.csv
     _step(
-        "slopewalk bands --workers 2 --walk contact.timeconst --walk contact.dampratio",
+        "slopewalk bands --workers 2 --walk contact.timeconst --walk contact.dampratio "
+        "--walk servo.damping",
         ("results/envelope/bands.csv", "results/envelope/bands.md"),
         15,
     ),  # fmt: skip
