@@ -48,9 +48,7 @@ def test_the_ax12a_sags_its_swing_foot_into_the_plane(spec):
     """Flat 2 s steps with the spec's servo (kp 9.26): the swing sole would be ~11 mm below the
     plane just after lift-off, which the simulation shows as the swing foot never leaving it."""
     plan = plan_walk(spec, GaitParams.nominal(spec, 2.0))
-    walk = compliant_walk(
-        plan, stiffness=spec.stiffness, damping=spec.stall_torque / spec.no_load_speed
-    )
+    walk = compliant_walk(plan, stiffness=spec.stiffness, damping=spec.joint_damping)
     ssp = ~plan.double_support
     assert plan.swing_sole[ssp, 2].min() > -1e-9
     assert walk.plan.swing_sole[ssp, 2].min() < -0.005

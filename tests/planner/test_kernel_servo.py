@@ -99,7 +99,7 @@ def test_compiled_servo_walk_is_the_numpy_one(spec, plan, limit, share):
     kw = dict(
         stiffness=spec.stiffness,
         velocity_gain=0.05,
-        damping=spec.stall_torque / spec.no_load_speed,
+        damping=spec.joint_damping,
         armature=spec.armature,
         force_limit=limit,
         feedforward=share * plan.tau if share else None,

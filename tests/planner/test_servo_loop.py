@@ -56,7 +56,7 @@ def test_a_soft_loop_rings_at_its_own_frequency(spec):
     gait content, the sway half as large).
     """
     plan = plan_walk(spec, GaitParams.nominal(spec, 2.0, steps=2))
-    damping = spec.stall_torque / spec.no_load_speed
+    damping = spec.joint_damping
     kw = dict(stiffness=spec.stiffness, damping=damping, armature=spec.armature)
     sway = servo_walk(plan, **kw).deflection - compliant_walk(plan, **kw).deflection
     x = sway[:, 5] - sway[:, 5].mean()  # the swing knee: its own servo's mode
@@ -166,7 +166,7 @@ def test_a_walk_is_made_again_only_at_a_friction_that_decides_a_lifting_soles_ho
     plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2, slope=np.deg2rad(10)))
     kw = dict(
         stiffness=spec.stiffness,
-        damping=spec.stall_torque / spec.no_load_speed,
+        damping=spec.joint_damping,
         armature=spec.armature,
         force_limit=spec.stall_torque,
         compiled=compiled,

@@ -27,7 +27,7 @@ A, D, KP = 0.0232, 1.5 / 6.18, 9.26  # the default spec's AX-12A: armature, damp
 
 
 def _ax12(spec, scale=1.0) -> RingLoop:
-    return RingLoop(spec.armature * scale, spec.stall_torque / spec.no_load_speed, spec.stiffness)
+    return RingLoop(spec.armature * scale, spec.joint_damping, spec.stiffness)
 
 
 def _settle(plan, loop) -> np.ndarray:

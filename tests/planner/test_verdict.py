@@ -131,7 +131,7 @@ def test_a_sagging_servo_strikes_the_plane(spec):
     """0.8 s steps on the AX-12A: the swing sole would go ~25 mm into the plane and roll the
     stance foot ~7.5 deg (tip angle 5); a feedforward loop (no sag) does not."""
     plan = plan_walk(spec, GaitParams.nominal(spec, 0.8))
-    damping = spec.stall_torque / spec.no_load_speed
+    damping = spec.joint_damping
     walk = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, armature=spec.armature)
     soft = predict(plan, friction=1.0, walk=walk, stiffness=spec.stiffness)
     assert "strike" in [e.kind for e in soft.events]
@@ -256,7 +256,7 @@ def test_saturation_names_the_first_sample_and_the_neediest_joint(spec, plan):
     """A servo limit at 80 % of the walk's peak loop torque: the event sits at the first
     sample where any joint needs more than the limit, and names the joint whose peak is
     highest; a limit above the peak predicts nothing. The reference is a plain loop."""
-    damping = spec.stall_torque / spec.no_load_speed
+    damping = spec.joint_damping
     walk = compliant_walk(plan, stiffness=spec.stiffness, damping=damping, armature=spec.armature)
     need = np.abs(walk.loop_torque)  # (n, 8) [N m]
     peak = need.max(axis=0)

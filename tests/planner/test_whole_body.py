@@ -243,7 +243,7 @@ def _settings(plan, *, feedforward: bool, force_limit: float | None = None) -> d
     return dict(
         stiffness=spec.stiffness,
         velocity_gain=spec.velocity_gain,
-        damping=spec.stall_torque / spec.no_load_speed,
+        damping=spec.joint_damping,
         armature=spec.armature,
         force_limit=limit,
         feedforward=ff,
