@@ -66,7 +66,7 @@ def _predictors() -> None:
 
     _stages(_PREDICTOR_STAGES)
     from slopewalk.planner.kernel.tables import ChainTable
-    from slopewalk.planner.kinematics import gravity_in_slope
+    from slopewalk.planner.kinematics import Chain, gravity_in_slope
     from slopewalk.planner.spec import load_spec
 
     n, dof = 3, 8
@@ -87,9 +87,12 @@ def _predictors() -> None:
         np.zeros((n, 3, body)), np.zeros((n, 3, body)), zero, 0 * eye, 0 * eye, zero, zero,
         dt, stance, both, gains[:5], (1.0, 0.0, 1.0), 0.5, np.zeros(body),
     )  # fmt: skip
-    links = np.zeros((n, 9, 3))
+    # the chain's own masses and inertias, read-only arrays as a trial passes them (a
+    # writable stand-in compiled a type a trial never calls, and left each sweep worker
+    # to compile the read-only one, ~2.5 s of CPU, at its first trial)
+    own, links = Chain.from_spec(load_spec()), np.zeros((n, 9, 3))
     whole_body.mass_and_stiffness(
-        np.ones(9), links, np.zeros((n, 9, 3, 3)), np.zeros((2, 9, 3, 3)), stance,
+        own.mass, links, np.zeros((n, 9, 3, 3)), own.inertia, stance,
         np.zeros((n, 8, 3)), np.zeros((n, 8, 3)), np.zeros((n, 3)), links,
     )  # fmt: skip
     row, pair = np.zeros(n), np.zeros((2, n))

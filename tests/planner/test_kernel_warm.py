@@ -14,9 +14,17 @@ import pytest
 from slopewalk.bench.sim.trial import run_trial
 from slopewalk.bench.sim.trial_spec import TrialSpec
 from slopewalk.planner.gait import GaitParams
-from slopewalk.planner.kernel import cache, dynamics, rocking, servo, warm
+from slopewalk.planner.kernel import cache, dynamics, rocking, servo, warm, whole_body
 
-TOP = (servo.integrate, servo.fixed_point, dynamics.linearised, dynamics.rows, rocking.rocking_loop)
+TOP = (
+    servo.integrate,
+    servo.fixed_point,
+    dynamics.linearised,
+    dynamics.rows,
+    rocking.rocking_loop,
+    whole_body.integrate,
+    whole_body.mass_and_stiffness,  # the chain's read-only arrays: a type of their own
+)
 
 
 def test_the_predictors_warm_up_calls_the_signatures_a_trial_calls(spec):
