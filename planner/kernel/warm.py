@@ -89,7 +89,7 @@ def _predictors() -> None:
     )  # fmt: skip
     # the chain's own masses and inertias, read-only arrays as a trial passes them (a
     # writable stand-in compiled a type a trial never calls, and left each sweep worker
-    # to compile the read-only one, ~2.5 s of CPU, at its first trial)
+    # to compile the read-only one, ~4.7 s of CPU, at its first trial; stop 55)
     own, links = Chain.from_spec(load_spec()), np.zeros((n, 9, 3))
     whole_body.mass_and_stiffness(
         own.mass, links, np.zeros((n, 9, 3, 3)), own.inertia, stance,
