@@ -69,6 +69,7 @@ def _predictors() -> None:
     from slopewalk.planner.kinematics import Chain, gravity_in_slope
     from slopewalk.planner.spec import load_spec
 
+    spec = load_spec()
     n, dof = 3, 8
     eye = np.repeat(np.eye(dof)[None], n, axis=0)
     zero = np.zeros((n, dof))
@@ -90,7 +91,7 @@ def _predictors() -> None:
     # the chain's own masses and inertias, read-only arrays as a trial passes them (a
     # writable stand-in compiled a type a trial never calls, and left each sweep worker
     # to compile the read-only one, ~4.7 s of CPU, at its first trial; stop 55)
-    own, links = Chain.from_spec(load_spec()), np.zeros((n, 9, 3))
+    own, links = Chain.from_spec(spec), np.zeros((n, 9, 3))
     whole_body.mass_and_stiffness(
         own.mass, links, np.zeros((n, 9, 3, 3)), own.inertia, stance,
         np.zeros((n, 8, 3)), np.zeros((n, 8, 3)), np.zeros((n, 3)), links,
@@ -101,7 +102,7 @@ def _predictors() -> None:
         lines, pair + 1.0, pair, row, row, row, row, row, row, pair, ~both, row, dt, 1.0, 1.0,
         np.zeros(n, dtype=np.bool_),
     )  # fmt: skip
-    t = ChainTable.of(load_spec())
+    t = ChainTable.of(spec)
     chain = (t.geometry, t.a, t.d5, t.mass, t.com, t.inertia)
     gravity = gravity_in_slope(0.0)
     sole, share = np.zeros((n, 3)), np.zeros(n)
