@@ -26,7 +26,14 @@ bilinearly over its corners at the planned CoP, clamped to the sole: the ground 
 beyond it, so a planned ZMP outside the sole leaves its moment unbalanced and the base
 turns). The second sole is held along x by a stiff spring while it carries load (held
 along y too, the nominal 2 s ``servo`` walk rolls 9.4° and tips at 1.63 s, where MuJoCo's
-rolls 2°: its lateral slide is first order in its roll, the servo loop's doc). The servo
+rolls 2°: its lateral slide is first order in its roll, the servo loop's doc), in double
+support and from the swing's apex on (``Model.held``): a sole that lands early is loaded
+more and more, as the double support it lands into holds it. Not while it lifts off: the
+plan carries the swing sole on from rest there, and the hold in these coordinates dragged
+the unloading trailing sole along with it, however little it carried, where friction
+holds it by at most μ times its load; so held, it propped the robot back onto itself for
+0.1 s and pitched the stance sole 2-3°, where MuJoCo's trailing foot unloads within 0.04 s
+and its stance sole stays flat (results/README.md, stop 56). The servo
 is the loop's: kp, kv, damping, armature, its feed-forward and its clip. Backward Euler on
 the plan's time base, the corners in contact implicit; at each touch-down the roles swap
 and the state is re-expressed about the new stance sole. The time loop runs on the
@@ -78,6 +85,7 @@ class Model:
         ideal: The same unclamped (negative where the planned CoP is off the sole), (8, n).
         second_point: ∂p/∂x of the second sole point, (3, DOF, n).
         second_turn: ∂θ/∂x of the second sole, (3, DOF, n).
+        held: Where the second sole, loaded, is held along x (module doc), (n,).
     """
 
     mass: np.ndarray
@@ -88,6 +96,7 @@ class Model:
     ideal: np.ndarray
     second_point: np.ndarray
     second_turn: np.ndarray
+    held: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -305,6 +314,17 @@ def _planned_loads(plan: Plan):
     return nominal, ideal
 
 
+def _held(plan: Plan) -> np.ndarray:
+    """Where a loaded second sole is held along x (module doc), (n,): the double supports,
+    and each single support from the swing sole's planned apex (its highest sample) on."""
+    held = np.asarray(plan.double_support, dtype=bool).copy()
+    single = np.flatnonzero(~held)
+    for run in np.split(single, np.flatnonzero(np.diff(single) > 1) + 1):
+        if run.size:
+            held[run[np.argmax(plan.swing_sole[run, 2]) :]] = True
+    return held
+
+
 def model_of(plan: Plan, *, compiled: bool = True) -> Model:
     """The whole-body system along ``plan`` (module doc); ``compiled``: M and the stiffness
     on the kernel (``kernel.whole_body.mass_and_stiffness``), else their numpy twin."""
@@ -323,7 +343,7 @@ def model_of(plan: Plan, *, compiled: bool = True) -> Model:
         mass, stiffness = _mass_and_stiffness(plan, chain, com, inertia, axes, origins, felt)
     corner, height, point, turn = _corners(plan, R, o, axes, origins)
     nominal, ideal = _planned_loads(plan)
-    return Model(mass, stiffness, corner, height, nominal, ideal, point, turn)
+    return Model(mass, stiffness, corner, height, nominal, ideal, point, turn, _held(plan))
 
 
 def _rows(a: np.ndarray) -> np.ndarray:
@@ -450,6 +470,7 @@ def _integrate_compiled(plan: Plan, model: Model, loop: _Loop, floor: tuple, sta
         np.diff(plan.t, prepend=plan.t[0]),
         np.ascontiguousarray(plan.stance, dtype=np.int64),
         np.ascontiguousarray(plan.double_support, dtype=np.bool_),
+        np.ascontiguousarray(model.held, dtype=np.bool_),
         tuple(float(g) for g in loop.gains),
         (float(floor[0]), float(floor[1]), TANGENT_FACTOR),
         FALLEN,
@@ -493,7 +514,7 @@ def _step(plan, model: Model, loop: _Loop, floor, k: int, h: float, x, v, anchor
     stiff += k_c * touching.T @ touching
     c += c_c * touching.T @ touching
     force += touching.T @ (model.nominal[on, k] - k_c * model.height[on, k])
-    if ahead[4:][on[4:]].sum() > 0:  # the second sole carries load: held along x
+    if model.held[k] and ahead[4:][on[4:]].sum() > 0:  # loaded, where held: along x
         along = model.second_point[:1, :, k]
         anchor = along @ x if anchor is None else anchor
         stiff += TANGENT_FACTOR * k_c * along.T @ along

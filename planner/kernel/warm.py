@@ -86,7 +86,7 @@ def _predictors() -> None:
     whole_body.integrate(
         square, 0 * square, np.zeros((n, 8, body)), corners, corners, corners,
         np.zeros((n, 3, body)), np.zeros((n, 3, body)), zero, 0 * eye, 0 * eye, zero, zero,
-        dt, stance, both, gains[:5], (1.0, 0.0, 1.0), 0.5, np.zeros(body),
+        dt, stance, both, both, gains[:5], (1.0, 0.0, 1.0), 0.5, np.zeros(body),
     )  # fmt: skip
     # the chain's own masses and inertias, read-only arrays as a trial passes them (a
     # writable stand-in compiled a type a trial never calls, and left each sweep worker

@@ -105,7 +105,7 @@ def _step(k, h, x, v, anchor, model, loop, gains, floor, forces, work):
     returns the second sole's anchor along the plane (nan: not held) and whether the system
     was regular; the corners' loads into ``forces[k]``. ``work``: the step's arrays, made
     once per walk (a step's own ~25 small arrays took half its time)."""
-    mass, stiffness, corner, height, nominal, ideal, point = model
+    mass, stiffness, corner, height, nominal, ideal, point, held = model
     k_c, c_c, tangent = floor
     dof = x.shape[0]
     _joint_rows(k, x, v, mass, stiffness, loop, gains, work)
@@ -127,7 +127,7 @@ def _step(k, h, x, v, anchor, model, loop, gains, floor, forces, work):
             for j in range(dof):
                 force[j] += row[j] * (nominal[k, cr] - k_c * height[k, cr])
             second |= cr >= 4
-    if second:  # the second sole carries load: held along x
+    if second and held[k]:  # loaded, where held (``whole_body.Model.held``): along x
         along = point[k, 0]
         if np.isnan(anchor):
             anchor = 0.0
@@ -160,7 +160,7 @@ def _step(k, h, x, v, anchor, model, loop, gains, floor, forces, work):
 @njit(**_KW)
 def integrate(
     mass, stiffness, corner, height, nominal, ideal, second_point, second_turn,
-    need, gravity_k, velocity_c, ff, qd, dt, stance, double_support,
+    need, gravity_k, velocity_c, ff, qd, dt, stance, double_support, held,
     gains, floor, fallen, start,
 ):  # fmt: skip
     """``whole_body._integrate`` (module doc): the states (n, DOF), the corners' loads [N]
@@ -168,14 +168,14 @@ def integrate(
 
     Per sample k: mass, stiffness (n, DOF, DOF); corner (n, 8, DOF); height, nominal, ideal
     (n, 8); second_point, second_turn (n, 3, DOF); need, ff, qd (n, 8); gravity_k,
-    velocity_c (n, 8, 8); dt, stance, double_support (n,). gains: kp, kv, damping,
+    velocity_c (n, 8, 8); dt, stance, double_support, held (n,). gains: kp, kv, damping,
     armature, τ_max; floor: k_c, c_c (and the tangential hold's factor, see the caller);
     fallen: the base turn [rad] past which the walk is held; start: x at rest (DOF,).
     """
     n, dof = dt.shape[0], start.shape[0]
     states, forces = np.zeros((n, dof)), np.zeros((n, 8))
     x, v, anchor = start.copy(), np.zeros(dof), np.nan
-    model = (mass, stiffness, corner, height, nominal, ideal, second_point)
+    model = (mass, stiffness, corner, height, nominal, ideal, second_point, held)
     loop = (need, gravity_k, velocity_c, ff, qd, ~double_support)
     square, row, corners = np.zeros((4, dof, dof)), np.zeros((5, dof)), np.zeros((2, 8))
     # m, c, K, force, lhs, the corners' pushes ahead and after, x + h v, rhs, C v, K (x + h v)
