@@ -104,8 +104,8 @@ _FIDELITY = {"paper": 0.3, "dense": 1, "paper-noise": 1, "dense-noise": 3}  # mi
 # in the servo modes at the ends of the servo's estimated values (8 ends each), and in
 # every mode at the ends of the floor contact's (4 ends each), and in the servo modes at the
 # ends of the joint damping (2 ends each)
-_HELD_OUT = {"random": 1.5, "robots": 1.5, "ga": 6, "ci": 0.2, "random-spec-ends": 11,
-             "ga-spec-ends": 40, "ga-noise": 11, "random-contact-ends": 4.5,
+_HELD_OUT = {"random": 1.5, "robots": 1.5, "ga": 6, "ci": 0.2, "random-spec-ends": 5,
+             "ga-spec-ends": 17, "ga-noise": 5, "random-contact-ends": 4.5,
              "ga-contact-ends": 16, "random-damping-ends": 1,
              "ga-damping-ends": 5}  # fmt: skip  # minutes on 2 cores
 _TRIALS = (("2", "0", "1.0"), ("0.5", "0", "1.0"), ("0.4", "0", "1.0"), ("1", "15", "0.5"),
