@@ -90,13 +90,15 @@ the analytic series, with the simulator's own thresholds (defined here, used by
   stretches where it sticks (|F_t| < μ F_n) at the run's ends, where it creeps with
   the contact's and the legs' give (measured ≤ 1.5 mm).
 
-* ``ring``: a loop without feed-forward (``servo``) takes each landing's load jump on
-  its spring and rings; where the walk lands again before that ring has settled (1.8
-  time constants of the loaded chain's slowest mode, longer than the step), the next
-  landing comes on a ringing robot, which the loop's walk, bolted to the plane, cannot
-  follow (``servo_ring``; MuJoCo's robot bounces back onto its old stance foot and
-  falls). Designed on the design GA sets (``ga-dev``, ``ga-dev2``, ``ga-dev-spec-ends``)
-  and their gaits re-timed at four armatures (results/README.md, stops 37 and 38).
+* ``ring``: a loop without feed-forward (``servo``) takes each double support's load
+  transfer on its spring and rings; where the walk lands again with more of that ring
+  left than ``RING_RESIDUAL`` of what a sudden load step would leave (the transfer's
+  cubic over the double support exciting the loaded chain's slowest mode, which decays
+  through the single support), the next landing comes on a ringing robot, which the
+  loop's walk, bolted to the plane, cannot follow (``servo_ring``; MuJoCo's robot bounces
+  back onto its old stance foot and falls). Designed on the design GA sets (``ga-dev``,
+  ``ga-dev2``, ``ga-dev-spec-ends``) and their gaits re-timed at four armatures, three
+  joint dampings and three stiffnesses (results/README.md, stops 37, 38 and 57).
 
 * ``saturation``: the loop asks a servo for more torque than its limit (the stall
   torque for ``servo``), the analytic twin of the simulator's ``torque_limit``.
@@ -123,7 +125,7 @@ import numpy as np
 from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.joints import JOINT_KINDS, JOINT_NAMES
 from slopewalk.planner.kinematics import GRAVITY, Chain
-from slopewalk.planner.servo_ring import RING_DECAYS, landing_rows, unsettled_landing
+from slopewalk.planner.servo_ring import RING_RESIDUAL, landing_rows, unsettled_landing
 from slopewalk.planner.strike import strike_roll
 from slopewalk.planner.tipping import excursion_integral, foot_rotation
 
@@ -343,24 +345,24 @@ def slide_runs(mask, xy):
         yield int(a), np.hypot(*(xy[a:b] - xy[a]).T)
 
 
-def ring_events(plan, settle: np.ndarray | None) -> list[PredictedEvent]:
-    """``ring`` at the first landing that comes before the last one's ring has settled
-    (``servo_ring``); ``settle``: the loop's settling time [s] at each touch-down
-    (``servo_ring.settle_times``), None for a loop that takes no load jump on its spring
-    (feed-forward, ``servo_ring`` module doc)."""
-    if settle is None:
+def ring_events(plan, residual: np.ndarray | None) -> list[PredictedEvent]:
+    """``ring`` at the first landing that finds more than ``RING_RESIDUAL`` of a load
+    step's ring left from the last load transfer (``servo_ring``); ``residual``: that
+    share at each touch-down (``servo_ring.landing_residuals``), None for a loop that takes
+    no load transfer on its spring (feed-forward, ``servo_ring`` module doc)."""
+    if residual is None:
         return []
-    found = unsettled_landing(plan, settle)
+    found = unsettled_landing(plan, residual)
     if found is None:
         return []
-    k, at = found
+    k, left = found
     return [
         PredictedEvent(
             float(plan.t[k]),
             "ring",
-            f"lands {plan.params.step_time:g} s after the last landing, before the servos' "
-            f"ring settles ({at:.3g} s: {RING_DECAYS:g} time constants of the loaded "
-            "joints' slowest mode)",
+            f"lands {plan.params.step_time:g} s after the last landing with {100 * left:.0f} % "
+            "of a load step's ring left on the loaded joints' slowest mode (the servos' "
+            f"ring settles below {100 * RING_RESIDUAL:g} %)",
         )
     ]
 
@@ -511,7 +513,7 @@ def predict(
     force_limit: float = np.inf,
     floor_stiffness: float | None = None,
     contact_time: float | None = None,
-    ring_settle: np.ndarray | None = None,
+    ring_residual: np.ndarray | None = None,
     body_tip: float | None = None,
 ) -> Prediction:
     """Every predicted event of ``plan`` on a plane of friction μ (see module doc).
@@ -529,9 +531,9 @@ def predict(
             (``bench/sim/floor.py``); None: a rigid floor, no give.
         contact_time: The floor contact's time constant τ [s] (``solref``), how long a
             dragged sole stays loaded per stretch (``foot_slide``); None: a rigid floor.
-        ring_settle: The loop's settling time [s] at each touch-down where it takes the
-            load's jumps on its spring (no feed-forward, ``servo_ring.settle_times``);
-            None: no ``ring`` check.
+        ring_residual: The share of a load step's ring the loop has left at each
+            touch-down where it takes the load's transfer on its spring (no feed-forward,
+            ``servo_ring.landing_residuals``); None: no ``ring`` check.
         body_tip: When the whole-body walk turns a loaded sole past ``TIP_ANGLE`` [s]
             (``whole_body.tip_time``), a ``tip``; None: it does not, or not modelled.
 
@@ -547,7 +549,7 @@ def predict(
         force_limit=force_limit,
         floor_stiffness=floor_stiffness,
         contact_time=contact_time,
-        ring_settle=ring_settle,
+        ring_residual=ring_residual,
         body_tip=body_tip,
     )
     slips, slide = slip_events(plan if walk is None else walk.plan, friction)
@@ -571,7 +573,7 @@ def events_but_slip(
     force_limit: float = np.inf,
     floor_stiffness: float | None = None,
     contact_time: float | None = None,
-    ring_settle: np.ndarray | None = None,
+    ring_residual: np.ndarray | None = None,
     body_tip: float | None = None,
 ) -> tuple[list[PredictedEvent], np.ndarray]:
     """``predict``'s events but ``slip`` (the only one μ decides), by time, and the
@@ -583,7 +585,7 @@ def events_but_slip(
     tips, rotation = tip_events(
         made, clearance=plan.swing_sole[:, 2], floor_stiffness=floor_stiffness, props=props
     )
-    events += tips + ring_events(plan, ring_settle)
+    events += tips + ring_events(plan, ring_residual)
     drags = swing_drag_events(plan, props)
     if walk is not None:
         if stiffness is None:

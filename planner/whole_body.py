@@ -8,7 +8,7 @@ MuJoCo's robot does that neither can is the two at once: the servos give while t
 lift, land early or late, bounce the load back onto the old foot and carry a turn through
 a landing (results/README.md, stops 33-49). Here the two are one linear system:
 
-    x = (z, roll, pitch of the stance sole about its sole point; δ, the 8 joints' q_ref − q)
+    x = (z, roll, pitch of the stance sole about its sole point; δ, the 8 joints' q − q_ref)
 
 linearised about the plan. The whole robot's mass matrix comes from the links' Jacobians
 (its joint block is the loop's M, exactly, in single support); the stiffness of the base's

@@ -456,8 +456,8 @@ def cause_class(r) -> str:
       hip width × (1/cos λ − 1), faster than the soft floor's contacts let a hopping
       sole stay loaded: ``planner.verdict.stretch_slide``), yet the robot walked: no
       loaded foot of MuJoCo's slid that far (its slip detection measures it);
-    * ring the robot rode out: predicted ``ring`` (the walk lands again before the
-      servos' ring from the last landing has settled, ``planner/servo_ring.py``), yet
+    * ring the robot rode out: predicted ``ring`` (the walk lands again with the
+      servos' ring from the last load transfer not yet settled, ``planner/servo_ring.py``), yet
       the robot walked: the ring it found was not enough to throw it;
     * a dragged swing sole the robot walked over: predicted ``swing_drag`` (the swing
       sole props the robot and the walk carries it along the plane,

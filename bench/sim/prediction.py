@@ -41,7 +41,7 @@ from slopewalk.planner.compliance import CompliantWalk, compliant_walk
 from slopewalk.planner.per_plan import once_per_plan
 from slopewalk.planner.plan import Plan
 from slopewalk.planner.servo_loop import friction_decides, linearised_at, servo_walk
-from slopewalk.planner.servo_ring import RingLoop, landing_rows, settle_times
+from slopewalk.planner.servo_ring import RingLoop, landing_residuals, landing_rows
 from slopewalk.planner.verdict import (
     PredictedEvent,
     Prediction,
@@ -176,7 +176,7 @@ def _events_of(
         force_limit=servo.force_limit,
         floor_stiffness=floor_stiffness,
         contact_time=contact_time,
-        ring_settle=_ring_settle(plan, servo),
+        ring_residual=_ring_residual(plan, servo),
         body_tip=tip_time(plan, body),
     )
 
@@ -261,16 +261,16 @@ class PredictionBeside:
 
 
 @once_per_plan
-def _ring_settle(plan: Plan, servo: Servo) -> np.ndarray | None:
-    """The loop's ring settling time [s] at each touch-down of ``plan`` where it takes the
-    load's jumps on its spring (no feed-forward; ``planner/servo_ring.py``), from the
-    spec's A, d + kv and kp on the chain's M and K_g before each landing; else None: no
-    ``ring`` check. Once per plan object and servo."""
+def _ring_residual(plan: Plan, servo: Servo) -> np.ndarray | None:
+    """The share of a load step's ring the loop has left at each touch-down of ``plan``
+    where it takes the load's transfer on its spring (no feed-forward;
+    ``planner/servo_ring.py``), from the spec's A, d + kv and kp on the chain's M and K_g
+    before each landing; else None: no ``ring`` check. Once per plan object and servo."""
     if servo.feedforward:
         return None
     loop = RingLoop(servo.armature, servo.damping + servo.kv, servo.kp)
     mass, gravity_k = linearised_at(plan, landing_rows(plan))
-    return settle_times(mass, gravity_k, loop)
+    return landing_residuals(plan, mass, gravity_k, loop)
 
 
 @lru_cache(maxsize=16)

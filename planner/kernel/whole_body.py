@@ -9,7 +9,7 @@ the d'Alembert forces) and reads every entry from those sums: 12.1 -> 8.3 ms for
 walk, ~4 ms of it allocating and writing the two 4.3 MB results.
 ``integrate`` is ``whole_body._integrate`` (its readable numpy twin, held equal by
 tests/planner/test_whole_body.py): backward Euler on the plan's time base of the linear
-system x = (z, roll, pitch of the stance sole; the 8 joints' q_ref − q), the servo's
+system x = (z, roll, pitch of the stance sole; the 8 joints' q − q_ref), the servo's
 output clipped at ±τ_max, the 8 sole corners unilateral springs and dampers made implicit
 where they push at the step's end, the second sole held along the plane while it carries
 load, and the state re-expressed about the new stance sole at each change of stance. Its

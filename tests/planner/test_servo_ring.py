@@ -1,11 +1,13 @@
 """The servo's ring (``planner/servo_ring.py``): the slowest decay of the loaded chain
 against hand-derived cases and against its free response, stepped exactly here (expm); the
-settling time on the default robot; the ``ring`` event."""
+ring a load transfer leaves against a mass-spring driven through it (integrated here); the
+residual on the default robot; the ``ring`` event."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from slopewalk.planner import servo_loop
@@ -13,11 +15,13 @@ from slopewalk.planner.errors import SlopewalkError
 from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 from slopewalk.planner.servo_ring import (
-    RING_DECAYS,
+    RING_RESIDUAL,
     RingLoop,
+    landing_residuals,
     landing_rows,
-    settle_times,
     slowest_decay,
+    slowest_mode,
+    transfer_residual,
     unsettled_landing,
 )
 from slopewalk.planner.trajectory import Timeline
@@ -30,9 +34,9 @@ def _ax12(spec, scale=1.0) -> RingLoop:
     return RingLoop(spec.armature * scale, spec.joint_damping, spec.stiffness)
 
 
-def _settle(plan, loop) -> np.ndarray:
-    """t_settle at each touch-down of ``plan``, as bench/sim/prediction.py makes it."""
-    return settle_times(*servo_loop.linearised_at(plan, landing_rows(plan)), loop)
+def _residual(plan, loop) -> np.ndarray:
+    """R at each touch-down of ``plan``, as bench/sim/prediction.py makes it."""
+    return landing_residuals(plan, *servo_loop.linearised_at(plan, landing_rows(plan)), loop)
 
 
 def test_a_joint_alone_decays_as_its_own_mass_spring():
@@ -97,20 +101,63 @@ def test_the_slowest_decay_is_the_free_responses(seed, link, sag):
     assert _late_decay(mass, gravity_k, loop, 96.0 / sigma) == pytest.approx(sigma, rel=0.1)
 
 
-def test_the_links_make_the_ring_last_longer_than_the_joints_own(spec):
-    """On the default robot's walk the loaded chain settles later than a joint alone
-    (RING_DECAYS · 2A / D) and no later than a joint carrying A plus the chain's largest
-    mass-matrix eigenvalue (light damping: each mode's modal inertia lies between)."""
-    plan = plan_walk(spec, GaitParams.nominal(spec, 0.75, steps=3))
+@settings(max_examples=25, deadline=None)
+@given(
+    omega=st.floats(5.0, 30.0),
+    zeta=st.floats(0.03, 0.6),
+    transfer=st.floats(0.01, 0.6),
+    after=st.floats(0.0, 0.4),
+)
+def test_the_residual_is_what_a_mass_spring_driven_through_the_transfer_rings_with(
+    omega, zeta, transfer, after
+):
+    """x'' + 2ζω x' + ω² x = ω² s(t), s the plan's cubic 3u² − 2u³ over the transfer
+    (u = t / t_d), integrated here from rest: its ring about x = 1 at t_d + after, the
+    amplitude √(e² + ((ė + σe)/ω_d)²) of e = x − 1, is R times the ring a sudden step
+    starts with (ω / ω_d), λ = −σ + i ω_d its root."""
+    sigma, damped = zeta * omega, omega * np.sqrt(1 - zeta**2)
+
+    def load(t):
+        u = min(max(t / transfer, 0.0), 1.0)
+        return 3 * u**2 - 2 * u**3
+
+    def rate(t, y):
+        return [y[1], omega**2 * (load(t) - y[0]) - 2 * sigma * y[1]]
+
+    end = transfer + after
+    got = solve_ivp(rate, (0.0, end), [0.0, 0.0], method="DOP853", rtol=1e-11, atol=1e-13,
+                    max_step=transfer / 50)  # fmt: skip
+    e, de = got.y[0, -1] - 1.0, got.y[1, -1]
+    ring = np.hypot(e, (de + sigma * e) / damped)
+    left = transfer_residual(complex(-sigma, damped), transfer, end)
+    assert ring == pytest.approx(left * omega / damped, rel=1e-6, abs=1e-9)
+
+
+def test_a_sudden_transfer_leaves_a_steps_ring_and_the_small_a_form_joins_the_closed_one():
+    mode = complex(-2.9, 14.0)
+    assert transfer_residual(mode, 0.0, 0.6) == pytest.approx(np.exp(-2.9 * 0.6))
+    near = 1e-3 / abs(mode)  # the two forms' seam, |a| = 1e-3
+    assert transfer_residual(mode, near * 0.999, 0.5) == pytest.approx(
+        transfer_residual(mode, near * 1.001, 0.5), rel=1e-5
+    )
+
+
+def test_the_ring_left_grows_with_the_armature_and_shrinks_with_the_damping_and_the_step(
+    spec,
+):
+    """On the default robot's walk: a heavier rotor rings longer, more damping or a longer
+    step leaves less; every landing after the first is checked, the first is not."""
     loop = _ax12(spec)
-    settle = _settle(plan, loop)
-    downs = Timeline.of(plan.params).touch_downs
-    assert landing_rows(plan).tolist() == (downs - 1).tolist()
-    mass, _ = servo_loop.linearised_at(plan, downs - 1)
-    heaviest = np.linalg.eigvalsh(0.5 * (mass + mass.transpose(0, 2, 1))).max(axis=1)
-    alone = RING_DECAYS * 2 * loop.armature / loop.damping
-    assert np.all(settle > 1.2 * alone)
-    assert np.all(settle <= 1.05 * RING_DECAYS * 2 * (loop.armature + heaviest) / loop.damping)
+    fast, slow = (plan_walk(spec, GaitParams.nominal(spec, t, steps=3)) for t in (0.5, 0.75))
+    base = _residual(fast, loop)
+    assert base[0] == 0.0 and np.all(base[1:] > 0)
+    assert np.all(_residual(fast, _ax12(spec, 2.0))[1:] > base[1:])
+    damped = RingLoop(loop.armature, 2 * loop.damping, loop.stiffness)
+    assert np.all(_residual(fast, damped)[1:] < base[1:])
+    assert np.all(_residual(slow, loop)[1:] < base[1:])
+    mass, gravity_k = servo_loop.linearised_at(fast, landing_rows(fast))
+    # the chain's slowest mode decays slower than the joint alone (σ = D / 2A)
+    assert -slowest_mode(mass[1], gravity_k[1], loop).real < loop.damping / (2 * loop.armature)
 
 
 def test_the_rows_are_the_full_linearisations(spec):
@@ -123,12 +170,15 @@ def test_the_rows_are_the_full_linearisations(spec):
     np.testing.assert_allclose(gravity_k, want_k[rows], rtol=0, atol=1e-6 * scale)
 
 
-def test_a_stiff_loop_settles_at_once_an_undamped_one_never_and_no_inertia_rings_none(spec):
+def test_a_stiff_loop_leaves_no_ring_an_undamped_one_all_and_no_inertia_none(spec):
     plan = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=2))
-    assert np.all(_settle(plan, RingLoop(spec.armature, 2.0 + D, 200.0)) < 0.1)
-    assert np.all(_settle(plan, RingLoop(spec.armature, 0.0, spec.stiffness)) == np.inf)
+    assert np.all(_residual(plan, RingLoop(spec.armature, 2.0 + D, 200.0)) < 1e-3)
+    undamped = _residual(plan, RingLoop(spec.armature, 0.0, spec.stiffness))
+    assert np.all(undamped[1:] > RING_RESIDUAL)
     zero = np.zeros((8, 8))
     assert slowest_decay(zero, zero, RingLoop(0.0, 0.0, 0.0)) == 0.0
+    zeros = np.zeros((2, 8, 8))  # the loop with no inertia: nothing rings
+    assert landing_residuals(plan, zeros, zeros, RingLoop(0.0, 0.0, KP)).tolist() == [0.0, 0.0]
 
 
 @pytest.mark.parametrize(
@@ -155,26 +205,26 @@ def test_the_unsettled_landing_is_the_first_touch_down_inside_the_ring(spec):
         downs.tolist()
         == (np.flatnonzero(~plan.double_support[:-1] & plan.double_support[1:]) + 1).tolist()
     )
-    gap = plan.t[downs[1]] - plan.t[downs[0]]
-    found = unsettled_landing(plan, _settle(plan, _ax12(spec)))  # 0.59 s ring, 0.5 s steps
-    assert found is not None and found[0] == downs[1] and found[1] > gap
-    assert unsettled_landing(plan, _settle(plan, _ax12(spec, 0.25))) is None  # 0.35 s of ring
+    left = _residual(plan, _ax12(spec))
+    found = unsettled_landing(plan, left)  # 24 % of a step's ring left at 0.5 s steps
+    assert found is not None and found[0] == downs[1] and found[1] == left[1] > RING_RESIDUAL
+    assert unsettled_landing(plan, _residual(plan, _ax12(spec, 0.25))) is None  # 9 %
     one = plan_walk(spec, GaitParams.nominal(spec, 0.5, steps=1))
-    assert unsettled_landing(one, _settle(one, _ax12(spec, 10.0))) is None  # one landing
+    assert unsettled_landing(one, _residual(one, _ax12(spec, 10.0))) is None  # one landing
 
 
 @pytest.mark.parametrize(("step_time", "rings"), [(0.5, True), (0.75, False)])
 def test_a_walk_faster_than_the_ring_is_predicted_ring(spec, step_time, rings):
     plan = plan_walk(spec, GaitParams.nominal(spec, step_time, steps=3))
-    settle = _settle(plan, _ax12(spec))
-    events = ring_events(plan, settle)
+    left = _residual(plan, _ax12(spec))
+    events = ring_events(plan, left)
     assert bool(events) == rings
     if rings:  # at the second landing, one step after the first
         first, second = plan.t[Timeline.of(plan.params).touch_downs[:2]]
         assert events[0].time == pytest.approx(second)
         assert second - first == pytest.approx(step_time, abs=2e-3)
     assert ring_events(plan, None) == []
-    kinds = [e.kind for e in predict(plan, friction=1.0, ring_settle=settle).events]
+    kinds = [e.kind for e in predict(plan, friction=1.0, ring_residual=left).events]
     assert ("ring" in kinds) == rings
     assert "ring" not in [e.kind for e in predict(plan, friction=1.0).events]
 

@@ -102,9 +102,10 @@ def test_an_error_in_the_prediction_beside_the_rollout_reaches_the_caller(spec, 
 
 def test_the_ring_is_checked_for_the_loop_without_feedforward_from_the_specs_servo(spec):
     """``ring`` (planner/servo_ring.py) in ``servo`` only: ``servo_ff`` is fed the load's
-    jumps, a stiff loop settles in hundredths of a second. Its settling time follows the
-    spec's armature: 0.5 s steps ring with the AX-12A's rotor inertia (0.59 s on this
-    walk) and not with a quarter of it (0.35 s); 0.75 s steps ring with twice it (0.93 s)."""
+    jumps, a stiff loop settles in hundredths of a second. The ring a landing finds left
+    follows the spec's armature: 0.5 s steps ring with the AX-12A's rotor inertia (24 % of
+    a load step's ring left on this walk) and not with a quarter of it (9 %); 0.75 s steps
+    do not (10 %), but with twice it (23 %)."""
     from dataclasses import replace
 
     def kinds(s, step_time, actuators):
