@@ -49,11 +49,12 @@ follows the armature as the ring's decay does, but the damping much less: at d =
 the gaits walk from about 0.75 s, at 0.243 from 0.67 s, at 0.56 from 0.5 s or faster. The
 decay alone (stop 38: a landing less than 1.8 time constants 1/σ after the last, the
 transfer's shape left out) put that boundary at 1.26, 0.62 and 0.27 s; R at
-``RING_RESIDUAL`` = 0.155 puts it near MuJoCo's, and decides those trials as MuJoCo does
-in 2927 of 3234 (the decay count: 2856; no check at all: 2802), the design sets' ``servo``
-trials in 2172 of 2492 (the decay count: 2152). Not explained: a softer loop (kp ×0.7)
-walks faster steps than either says, its ring larger and slower (R decides 178 of its 231
-trials as MuJoCo does, the decay count 193).
+``RING_RESIDUAL`` = 0.155 puts it at about 0.9, 0.65 and under 0.5 s (still late at the
+damping's low end) and where MuJoCo's is at every armature, and decides those trials as
+MuJoCo does in 2927 of 3234 (the decay count: 2856; no check at all: 2802), the design
+sets' ``servo`` trials in 2172 of 2492 (the decay count: 2152). Not explained: a softer
+loop (kp ×0.7) walks faster steps than either says, its ring larger and slower (R decides
+178 of its 231 trials as MuJoCo does, the decay count 193).
 
 With feed-forward (``servo_ff``) the loop is fed the planned torque, load transfer
 included, and its spring takes only what the plan gets wrong: no ring of that size
