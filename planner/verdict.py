@@ -361,8 +361,8 @@ def ring_events(plan, residual: np.ndarray | None) -> list[PredictedEvent]:
             float(plan.t[k]),
             "ring",
             f"lands {plan.params.step_time:g} s after the last landing with {100 * left:.0f} % "
-            "of a load step's ring left on the loaded joints' slowest mode (the servos' "
-            f"ring settles below {100 * RING_RESIDUAL:g} %)",
+            "of a load step's ring left on the loaded joints' slowest mode (more than "
+            f"the {100 * RING_RESIDUAL:g} % a landing takes, servo_ring)",
         )
     ]
 
