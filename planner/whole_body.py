@@ -24,7 +24,12 @@ f = f_nom + k_c (−z) − 2 τ ζ² k_c ż where that is positive, none otherwi
 off the plane, f_nom the plan's load on it (each sole's planned normal force spread
 bilinearly over its corners at the planned CoP, clamped to the sole: the ground cannot push
 beyond it, so a planned ZMP outside the sole leaves its moment unbalanced and the base
-turns). The second sole is held along x by a stiff spring while it carries load (held
+turns); and only while its spring is pressed, f_nom + k_c (−z) > 0: MuJoCo's contact
+exists only for a geom in the plane, its damper with it. (Until stop 58 the damper pushed
+a corner still above the plane that came down fast: at the joint damping's high end a
+swing sole lagging 1.6 mm above the plane at its touch-down hovered there on 3-4 N for
+0.1 s, on its toe, and the robot tipped in the model only; results/README.md.)
+The second sole is held along x by a stiff spring while it carries load (held
 along y too, the nominal 2 s ``servo`` walk rolls 9.4° and tips at 1.63 s, where MuJoCo's
 rolls 2°: its lateral slide is first order in its roll, the servo loop's doc), in double
 support and from the swing's apex on (``Model.held``): a sole that lands early is loaded
@@ -530,11 +535,14 @@ def _step(plan, model: Model, loop: _Loop, floor, k: int, h: float, x, v, anchor
 
 def _pushes(model: Model, k: int, floor: tuple, position: np.ndarray, rate: np.ndarray):
     """What each corner's spring and damper would push at sample k for the state
-    ``position`` moving at ``rate`` [N], (8,): f_nom − k_c (height + z) − c_c ż (module doc;
-    negative where the corner is off the plane)."""
+    ``position`` moving at ``rate`` [N], (8,): f_nom − k_c (height + z) − c_c ż where the
+    spring is pressed (f_nom − k_c (height + z) > 0), else the spring's own f_nom − k_c
+    (height + z) ≤ 0 (module doc; ≤ 0 where the corner pushes nothing: a corner off the
+    plane has no damper either, however fast it comes down)."""
     k_c, c_c = floor
     jz = model.corner[:, :, k]
-    return model.nominal[:, k] - k_c * (model.height[:, k] + jz @ position) - c_c * (jz @ rate)
+    spring = model.nominal[:, k] - k_c * (model.height[:, k] + jz @ position)
+    return np.where(spring > 0, spring - c_c * (jz @ rate), spring)
 
 
 def tip_time(plan: Plan, walk: Walk) -> float | None:

@@ -33,7 +33,8 @@ BASE = 3  # z, roll, pitch of the stance sole (``whole_body.BASE``)
 @njit(**_KW)
 def _pushes(corner, height, nominal, k_c, c_c, position, rate, out):
     """Each corner's spring and damper push for ``position`` moving at ``rate`` [N], (8,):
-    f_nom − k_c (height + z) − c_c ż (``whole_body._pushes``)."""
+    f_nom − k_c (height + z) − c_c ż where the spring is pressed, else the spring's own
+    f_nom − k_c (height + z) ≤ 0 (``whole_body._pushes``)."""
     dof = position.shape[0]
     for c in range(8):
         z = 0.0
@@ -41,7 +42,8 @@ def _pushes(corner, height, nominal, k_c, c_c, position, rate, out):
         for j in range(dof):
             z += corner[c, j] * position[j]
             zd += corner[c, j] * rate[j]
-        out[c] = nominal[c] - k_c * (height[c] + z) - c_c * zd
+        spring = nominal[c] - k_c * (height[c] + z)
+        out[c] = spring - c_c * zd if spring > 0 else spring
     return out
 
 
