@@ -4,8 +4,8 @@ re-timed and played by the AX-12A loop without feed-forward (results/README.md, 
 
 With the damping at its estimated low end (0.12 N m s/rad) MuJoCo's robot walks 0.9 s
 steps that the ring's decay alone would call ringing (T σ ≈ 1.2, under stop 38's 1.8
-time constants); at the spec's own damping it falls at 0.6 s steps, as the check says (the whole-body
-walk tips it earlier since stop 58; the check still calls the ring).
+time constants); at the spec's own damping it falls at 0.6 s steps, as the check says
+(the whole-body walk tips it earlier since stop 58; the check still calls the ring).
 The two residuals bracket ``RING_RESIDUAL``: 0.14 walks, 0.20 falls; the check fails
 here if its threshold is halved or doubled."""
 
