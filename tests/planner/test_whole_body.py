@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from design_gaits import leaning_uphill
 
 from slopewalk.planner import whole_body as wb
 from slopewalk.planner.errors import SlopewalkError
@@ -284,17 +285,7 @@ def test_a_corner_off_the_plane_carries_no_load(spec, compiled):
     end (0.56 N m s/rad), whose swing sole lags 1.6 mm above the plane at its touch-down
     (results/README.md, stop 58); the damper alone held its toe up on 3.4 N there."""
     stiff = spec_at(spec, "servo.damping", 0.56)
-    gait = GaitParams(
-        step_time=0.45,
-        slope=np.deg2rad(7.5),
-        hip_height=0.1792653,
-        swing_lift=0.0074864,
-        tilt=np.deg2rad(19.8915),
-        pelvis_offset=0.0137907,
-        step_length=0.0556639,
-        sway_share=0.8466267,
-    )
-    plan = plan_walk(stiff, gait)
+    plan = plan_walk(stiff, leaning_uphill(stiff))
     settings = _settings(plan, feedforward=False)
     walked = wb.walk(plan, compiled=compiled, **settings)
     model = wb.model_of(plan)

@@ -3,15 +3,13 @@ free along the plane, measured in MuJoCo: held along x with the plan's swing, th
 propped the robot back onto itself and pitched the stance sole, where MuJoCo's trailing foot
 unloads and its stance sole stays flat (results/README.md, stop 56)."""
 
-import dataclasses
-
 import numpy as np
 import pytest
+from design_gaits import leaning_uphill
 
 from slopewalk.bench.sim.events import loaded_tilt
 from slopewalk.bench.sim.playback import play
 from slopewalk.bench.sim.prediction import body_walk
-from slopewalk.planner.gait import GaitParams
 from slopewalk.planner.plan import plan_walk
 
 # [deg]: a fifth of the tip angle (5°); the held sole put the model's stance sole 1.9° off
@@ -23,18 +21,7 @@ TOLERANCE = 1.0
 def walked(spec):
     """A design set's GA gait (ga-dev, 0.45 s steps up 7.5°, extended family, max margin:
     a 7.5 mm lift and a 20° lean) played by the AX-12A loop without feedforward."""
-    gait = dataclasses.replace(
-        GaitParams.nominal(spec, 0.45, steps=2),
-        slope=np.deg2rad(7.5),
-        hip_height=0.1792653,
-        swing_lift=0.0074864,
-        tilt=np.deg2rad(19.8915),
-        pelvis_offset=0.0137907,
-        step_length=0.0556639,
-        sway_share=0.8466267,
-        tilt_profile=None,
-    )
-    plan = plan_walk(spec, gait)
+    plan = plan_walk(spec, leaning_uphill(spec, steps=2))
     recording = play(plan, friction=1.0, actuators="servo")
     return plan, recording, body_walk(plan, friction=1.0, actuators="servo")
 
